@@ -1,0 +1,52 @@
+"""The `prsc` command line: one subcommand module per verb in prsc/commands/."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.util
+import sys
+
+from prsc.errors import PrscError, format_error
+
+# Each module in prsc.commands exposes `add_parser(subparsers)` and `run(args) -> int`.
+# Imported lazily so `prsc check` does not pay for mujoco, pxr or pybullet.
+COMMANDS = ("check", "explain", "sample", "compile", "run", "bench", "preview")
+
+
+def _available_commands() -> list[str]:
+    """Commands whose module exists (the stages land one at a time)."""
+    found = []
+    for name in COMMANDS:
+        if importlib.util.find_spec(f"prsc.commands.{name}") is not None:
+            found.append(name)
+    return found
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every available subcommand."""
+    parser = argparse.ArgumentParser(prog="prsc", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in _available_commands():
+        module = importlib.import_module(f"prsc.commands.{name}")
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: run a subcommand, turning user errors into exit code 2."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    module = importlib.import_module(f"prsc.commands.{args.command}")
+    try:
+        return int(module.run(args) or 0)
+    except PrscError as error:
+        sys.stderr.write(format_error(error))
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write("prsc: interrupted\n")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

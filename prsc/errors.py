@@ -1,0 +1,74 @@
+"""Source spans and the one error type every stage raises for bad user input."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Span:
+    """A region of a source file: 1-based line and column of its start and end."""
+
+    path: str
+    line: int
+    column: int
+    end_line: int
+    end_column: int
+
+    def __str__(self) -> str:
+        return f"{self.path}:{self.line}:{self.column}"
+
+
+class PrscError(Exception):
+    """A user-facing error: reported as `path:line:col: error: message`, exit code 2."""
+
+    def __init__(self, message: str, span: Span | None = None, notes: tuple[tuple[str, Span | None], ...] = ()):
+        super().__init__(message)
+        self.message = message
+        self.span = span
+        self.notes = tuple(notes)
+
+
+def _source_line(path: str, line: int) -> str | None:
+    """The text of one line of a file, or None when it cannot be read as text."""
+    try:
+        with open(path, "rb") as handle:
+            for number, raw in enumerate(handle, start=1):
+                if number == line:
+                    return raw.decode("utf-8", errors="replace").rstrip("\r\n")
+    except OSError:
+        return None
+    return None
+
+
+def _caret_block(span: Span) -> str:
+    """The source line of a span with a caret under its first column."""
+    text = _source_line(span.path, span.line)
+    if text is None:
+        return ""
+    text = text.expandtabs(1)
+    if len(text) > 200:  # keep a minified or binary line readable
+        start = max(0, span.column - 80)
+        text = text[start : start + 160]
+        col = span.column - start
+    else:
+        col = span.column
+    width = 1
+    if span.end_line == span.line and span.end_column > span.column:
+        width = min(span.end_column - span.column, max(1, len(text) - col + 1))
+    printable = "".join(ch if ch.isprintable() else "?" for ch in text)
+    return f"    {printable}\n    {' ' * (col - 1)}{'^' * width}\n"
+
+
+def format_error(error: PrscError, kind: str = "error") -> str:
+    """Render an error as the compiler prints it to stderr."""
+    if error.span is None:
+        out = f"prsc: {kind}: {error.message}\n"
+    else:
+        out = f"{error.span}: {kind}: {error.message}\n" + _caret_block(error.span)
+    for note, span in error.notes:
+        if span is None:
+            out += f"  note: {note}\n"
+        else:
+            out += f"{span}: note: {note}\n" + _caret_block(span)
+    return out
