@@ -23,20 +23,33 @@ def _available_commands() -> list[str]:
     return found
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every available subcommand."""
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser with every available subcommand (or just `only`, to import less)."""
     parser = argparse.ArgumentParser(prog="prsc", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in _available_commands():
+        if only is not None and name != only:
+            continue
         module = importlib.import_module(f"prsc.commands.{name}")
         module.add_parser(sub)
     return parser
 
 
+def _requested_command(argv: list[str]) -> str | None:
+    """The subcommand named first on the command line, when it is an available one."""
+    for word in argv:
+        if word.startswith("-"):
+            return None  # a global option (e.g. --help): build the full parser
+        return word if word in _available_commands() else None
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run a subcommand, turning user errors into exit code 2."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    words = sys.argv[1:] if argv is None else list(argv)
+    # Import only the requested command's module: `prsc check` must not pay for numpy.
+    parser = build_parser(_requested_command(words))
+    args = parser.parse_args(words)
     module = importlib.import_module(f"prsc.commands.{args.command}")
     try:
         return int(module.run(args) or 0)

@@ -192,6 +192,10 @@ class Specifier:
     span: Span
     sets: tuple[str, ...]  # properties this specifier determines, e.g. ("position",)
     reads: tuple[str, ...]  # properties of the same object it needs first, e.g. ("orientation", "width")
+    # True on a position specifier that must erode with the orientation-free bound (the
+    # radius of the footprint) because the object's orientation depends on its position
+    # (`facing toward`); "orientation" is then absent from reads (added by the front end).
+    orientation_free: bool = field(default=False, kw_only=True)
 
 
 @dataclass(frozen=True)
@@ -303,6 +307,8 @@ class ObjectDecl:
     specifiers: tuple[Specifier, ...]
     # Names of scene objects this one depends on (all earlier in Program.objects).
     depends_on: tuple[str, ...] = ()
+    # The class and its ancestors, most derived first, ending with "Object" (front end addition).
+    class_chain: tuple[str, ...] = ()
 
     def prop(self, name: str) -> Expr | None:
         """The defining expression of a property, or None."""

@@ -1,0 +1,91 @@
+"""AST specifiers -> IR specifiers: argument types, what each sets and reads."""
+
+from __future__ import annotations
+
+from prsc.errors import PrscError
+from prsc.ir import model as ir
+from prsc.ir.builtins import AXES, BOX_READS
+from prsc.ir.expressions import LOCATED_TYPES, POINT_TYPES, ExprResolver, article, expect, type_words
+from prsc.ir.scope import ClassInfo, VariableInfo, did_you_mean
+from prsc.syntax import nodes
+
+T = ir.Type
+POSITION = ("position",)
+PLANAR_REGIONS = ("rectangle", "polygon")
+
+
+def _region_kind(resolver: ExprResolver, expr: ir.Expr) -> str | None:
+    """The region constructor behind an expression, following variables (None: not known statically)."""
+    seen = 0
+    while isinstance(expr, ir.VarRef) and seen < 100:
+        binding = resolver.scope.variables.get(expr.name)
+        if not isinstance(binding, VariableInfo):
+            return None
+        expr = binding.value
+        seen += 1
+    return expr.kind if isinstance(expr, ir.RegionExpr) else None
+
+
+def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifier) -> ir.Specifier:
+    """The IR of one specifier on an object of class cls."""
+    r = resolver.resolve
+    span = spec.span
+    if isinstance(spec, nodes.WithSpec):
+        return _with(resolver, cls, spec)
+    if isinstance(spec, nodes.AtSpec):
+        point = expect(r(spec.point), POINT_TYPES, "the point after `at`")
+        return ir.At(span, POSITION, (), point)
+    if isinstance(spec, nodes.InSpec):
+        region = r(spec.region)
+        if region.type not in (T.REGION, T.ANY):
+            raise PrscError(f"`in` needs a region, not {article(region.type)}", region.span)
+        reads = BOX_READS if spec.completely else ()
+        return ir.In(span, POSITION, reads, region, spec.completely)
+    if isinstance(spec, nodes.OnSpec):
+        target = r(spec.target)
+        word = "completely on" if spec.completely else "on"
+        if target.type not in (T.OBJECT, T.REGION, T.VECTOR, T.ORIENTED_POINT, T.ANY):
+            raise PrscError(f"`{word}` needs an object, a planar region or a point, not {article(target.type)}",
+                            target.span)
+        if target.type == T.REGION:
+            kind = _region_kind(resolver, target)
+            if kind is not None and kind not in PLANAR_REGIONS:
+                raise PrscError(f"`{word}` needs a planar region (Rectangle3D, Rect3D, ConvexPolygon3D), "
+                                f"not a {kind} region; use `in` for a solid region", target.span)
+        return ir.On(span, POSITION, BOX_READS, target, spec.completely)
+    if isinstance(spec, nodes.DirectionSpec):
+        word = {"left": "left of", "right": "right of", "ahead": "ahead of"}.get(spec.relation, spec.relation)
+        target = expect(r(spec.target), LOCATED_TYPES, f"the reference of `{word}`")
+        by = expect(r(spec.by), {T.SCALAR}, f"the gap after `{word} ... by`") if spec.by is not None else None
+        return ir.Direction(span, POSITION, BOX_READS, spec.relation, target, by)
+    if isinstance(spec, nodes.BeyondSpec):
+        target = expect(r(spec.target), LOCATED_TYPES, "the reference of `beyond`")
+        by = expect(r(spec.by), {T.SCALAR, T.VECTOR}, "the amount after `beyond ... by`")
+        origin = expect(r(spec.origin), LOCATED_TYPES, "the point after `beyond ... from`")
+        return ir.Beyond(span, POSITION, (), target, by, origin)
+    if isinstance(spec, nodes.AlignedSpec):
+        axis = spec.axis.lower()
+        if axis not in AXES:
+            raise PrscError(f"`aligned with` takes the axis x, y or z, not '{spec.axis}'", spec.axis_span)
+        target = expect(r(spec.target), LOCATED_TYPES, "the reference of `aligned with`")
+        return ir.AlignedWith(span, POSITION, (), target, axis)
+    if isinstance(spec, nodes.FacingSpec):
+        direction = expect(r(spec.direction), {T.VECTOR, T.SCALAR},
+                           "the direction after `facing` (a vector, or a yaw angle)")
+        return ir.Facing(span, ("orientation",), (), direction)
+    if isinstance(spec, nodes.FacingTowardSpec):
+        target = expect(r(spec.target), LOCATED_TYPES, "the target of `facing toward`")
+        return ir.FacingToward(span, ("orientation",), POSITION, target)
+    raise PrscError("unknown specifier", span)  # pragma: no cover
+
+
+def _with(resolver: ExprResolver, cls: ClassInfo, spec: nodes.WithSpec) -> ir.With:
+    prop = spec.prop
+    accepted = cls.accepted_types(prop)
+    if accepted is None:
+        raise PrscError(f"unknown property '{prop}' for a {cls.name}{did_you_mean(prop, cls.properties())}",
+                        spec.prop_span)
+    value = resolver.resolve(spec.value)
+    if value.type != T.ANY and value.type not in accepted:
+        raise PrscError(f"`with {prop}` needs {type_words(accepted)}, not {article(value.type)}", value.span)
+    return ir.With(spec.span, (prop,), (), prop, value)

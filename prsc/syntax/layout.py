@@ -1,0 +1,104 @@
+"""Line layout between the lexer and the parser: newlines, indentation, bracket depth.
+
+A statement continues on the next line inside brackets and after a trailing comma, so
+those newlines are dropped. Every other newline is passed on, followed by _INDENT or
+_DEDENT tokens when the indentation changes (the grammar accepts them only in class
+bodies, so an indented top-level statement is a syntax error there, with its position).
+"""
+
+from __future__ import annotations
+
+from typing import Iterator
+
+from lark import Token
+from lark.lark import PostLex
+
+OPENING = {"LPAR": "(", "LSQB": "[", "LBRACE": "{"}
+CLOSING = {"RPAR", "RSQB", "RBRACE"}
+MAX_BRACKET_DEPTH = 100
+TAB_SIZE = 8
+
+
+class LayoutError(Exception):
+    """A layout problem at a position (the parser front end adds the path)."""
+
+    def __init__(self, message: str, token: Token):
+        super().__init__(message)
+        self.message = message
+        self.token = token
+
+
+def _indent_width(newline_token: str) -> int:
+    """The indentation of the line a newline token leads to (tabs to multiples of 8)."""
+    last = newline_token.rsplit("\n", 1)[-1]
+    if "#" in last:  # the file ends in a comment: no next line
+        return 0
+    width = 0
+    for ch in last:
+        if ch == "\t":
+            width = (width // TAB_SIZE + 1) * TAB_SIZE
+        elif ch == " ":
+            width += 1
+    return width
+
+
+def _indent_token(kind: str, newline: Token, width: int) -> Token:
+    """An _INDENT/_DEDENT token placed at the first column of the next line's text."""
+    line = (newline.end_line or newline.line or 1)
+    return Token(kind, "", start_pos=newline.end_pos, line=line, column=width + 1,
+                 end_line=line, end_column=width + 2, end_pos=newline.end_pos)
+
+
+class Layout(PostLex):
+    """The post-lexer: drops continuation newlines and adds indentation tokens."""
+
+    always_accept = ("_NL",)
+
+    def __init__(self) -> None:
+        self.open_brackets: list[Token] = []  # of the parse in progress (read when reporting errors)
+
+    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
+        """Yield the parser's token stream."""
+        brackets: list[Token] = []
+        self.open_brackets = brackets
+        indents = [0]
+        last: Token | None = None
+        for token in stream:
+            kind = token.type
+            if kind == "_NL":
+                if brackets or (last is not None and last.type == "COMMA"):
+                    continue
+                yield token
+                width = _indent_width(token)
+                if width > indents[-1]:
+                    indents.append(width)
+                    yield _indent_token("_INDENT", token, width)
+                elif width < indents[-1]:
+                    while width < indents[-1]:
+                        indents.pop()
+                        yield _indent_token("_DEDENT", token, width)
+                    if width != indents[-1]:
+                        raise LayoutError("this line's indentation matches no enclosing block",
+                                          _indent_token("_DEDENT", token, width))
+                last = token
+                continue
+            if last is None and token.column != 1:
+                raise LayoutError("unexpected indentation (only a class body is indented)", token)
+            if kind in OPENING:
+                brackets.append(token)
+                if len(brackets) > MAX_BRACKET_DEPTH:
+                    raise LayoutError(f"brackets nested more than {MAX_BRACKET_DEPTH} deep", token)
+            elif kind in CLOSING and brackets:
+                brackets.pop()
+            yield token
+            last = token
+        if brackets:
+            raise LayoutError(f"'{OPENING[brackets[-1].type]}' is never closed", brackets[-1])
+        if last is not None and last.type != "_NL":
+            end = Token("_NL", "\n", start_pos=last.end_pos, line=last.end_line, column=last.end_column,
+                        end_line=last.end_line, end_column=last.end_column + 1, end_pos=last.end_pos)
+            yield end
+            last = end
+        while len(indents) > 1:
+            indents.pop()
+            yield _indent_token("_DEDENT", last, 0)

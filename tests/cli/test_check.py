@@ -1,0 +1,71 @@
+"""`prsc check`: summaries, exit codes, error format, and no heavy imports."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+from prsc.cli import main
+
+REPO = Path(__file__).resolve().parents[2]
+ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
+
+
+def test_originals_and_our_specs_check_clean(capsys):
+    files = sorted(str(p) for p in ORIGINAL.glob("*.prs")) + sorted(str(p) for p in (REPO / "specs").glob("*.prs"))
+    assert main(["check", *files]) == 0
+    out = capsys.readouterr().out
+    assert "tableCube.prs: ok, 7 objects (2 files)" in out
+    assert "  tr_1: Tray -- completely on table; ahead of r1 by 0.1; left of (top table) by 0.2" in out
+
+
+def test_summary_lists_specifiers_in_evaluation_order(tmp_path, capsys):
+    spec = tmp_path / "s.prs"
+    spec.write_text("from tabletop import *\nt = Table\nc = Cube on t, with width 0.1\n")
+    assert main(["check", str(spec)]) == 0
+    assert "  c: Cube -- with width 0.1; on t\n" in capsys.readouterr().out
+
+
+def test_error_exit_code_and_format(tmp_path, capsys):
+    spec = tmp_path / "bad.prs"
+    spec.write_text("from tabletop import *\nc = Cube on 3.0\n")
+    assert main(["check", str(spec)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == f"{spec}:2:13: error: `on` needs an object, a planar region or a point, not a scalar"
+    assert err[1] == "    c = Cube on 3.0"
+    assert err[2] == "    " + " " * 12 + "^^^"
+
+
+def test_every_file_is_checked_and_any_error_fails(tmp_path, capsys):
+    good, bad = tmp_path / "good.prs", tmp_path / "bad.prs"
+    good.write_text("x = 1\n")
+    bad.write_text("x = \n")
+    assert main(["check", str(bad), str(good)]) == 2
+    captured = capsys.readouterr()
+    assert f"{good}: ok" in captured.out and f"{bad}:1:5: error" in captured.err
+
+
+def test_include_directory(tmp_path, capsys):
+    lib = tmp_path / "lib"
+    lib.mkdir()
+    (lib / "mine.prs").write_text("class Mine:\n    width: 0.5\n")
+    spec = tmp_path / "s.prs"
+    spec.write_text("from mine import *\nMine\n")
+    assert main(["check", str(spec)]) == 2
+    assert "import not found" in capsys.readouterr().err
+    assert main(["check", "--include", str(lib), str(spec)]) == 0
+
+
+def test_missing_file_and_directory(tmp_path, capsys):
+    assert main(["check", str(tmp_path / "nope.prs"), str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot read" in err and "is a directory" in err
+
+
+def test_check_does_not_import_numeric_libraries():
+    code = ("import sys; from prsc.cli import main; rc = main(['check', '-q', 'specs/table_cube.prs']);"
+            "heavy = [m for m in ('numpy', 'scipy', 'mujoco', 'pxr', 'pybullet') if m in sys.modules];"
+            "print(rc, heavy)")
+    result = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == "0 []"
