@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import importlib.util
 import sys
 
@@ -59,6 +60,19 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("prsc: interrupted\n")
         return 130
+    except BrokenPipeError:
+        # The reader went away (`prsc sample … | head`): stop quietly, as Unix tools do.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
+    except Exception as error:  # a bug in prsc, not in the user's input
+        if os.environ.get("PRSC_DEBUG"):
+            raise
+        sys.stderr.write(
+            f"prsc: internal error: {type(error).__name__}: {error}\n"
+            "  (this is a bug in prsc; rerun with PRSC_DEBUG=1 for the traceback)\n"
+        )
+        return 3
 
 
 if __name__ == "__main__":

@@ -1,0 +1,63 @@
+"""Task roles of a handover scene, found from object classes (never from variable names)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from prsc.errors import PrscError
+from prsc.geometry.rotations import quat_to_matrix
+
+
+@dataclass(frozen=True)
+class Roles:
+    """The scene objects the handover controller works with (scene JSON object dicts)."""
+
+    left_robot: dict
+    right_robot: dict
+    source_tray: dict
+    target_tray: dict
+    cube: dict
+    camera: dict
+
+
+def footprint_distance(box: dict, point) -> float:
+    """Horizontal distance (m) from a point to a box object's footprint; 0 inside it."""
+    local = quat_to_matrix(box["quaternion"]).T @ (np.asarray(point, float) - np.asarray(box["position"], float))
+    half = np.asarray(box["dimensions"], float)[:2] / 2
+    outside = np.maximum(np.abs(local[:2]) - half, 0.0)
+    return float(np.linalg.norm(outside))
+
+
+def find_roles(scene: dict) -> Roles:
+    """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera."""
+    by_class: dict[str, list[dict]] = {}
+    for obj in scene.get("objects", []):
+        by_class.setdefault(obj.get("class"), []).append(obj)
+    wanted = {"Robot": 2, "Tray": 2, "Cube": 1, "Camera": 1}
+    problems = []
+    for cls, count in wanted.items():
+        found = len(by_class.get(cls, []))
+        if found < count:
+            problems.append(f"{count} {cls}{'s' if count > 1 else ''} (found {found})")
+        elif cls in ("Cube", "Camera") and found > count:
+            problems.append(f"exactly one {cls} (found {found})")
+        elif found > count:
+            problems.append(f"exactly {count} {cls}s (found {found})")
+    if problems:
+        raise PrscError(
+            f"scene {scene.get('spec', '?')} #{scene.get('index', '?')} does not fit the handover task: "
+            f"it needs {', '.join(problems)}; the runner expects two Robots, two Trays, one Cube and one Camera"
+        )
+    robots = sorted(by_class["Robot"], key=lambda o: o["position"][0])
+    for robot in robots:
+        if robot.get("model") != "panda":
+            raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}; the runner drives Pandas only")
+    cube = by_class["Cube"][0]
+    trays = sorted(by_class["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
+    return Roles(
+        left_robot=robots[0], right_robot=robots[1],
+        source_tray=trays[0], target_tray=trays[1],
+        cube=cube, camera=by_class["Camera"][0],
+    )
