@@ -1,0 +1,7 @@
+"""Scene sampling: exact sequential placement, hit-and-run, and the rejection baseline."""
+
+from __future__ import annotations
+
+from prsc.sampling.sampler import SAMPLERS, Sampler, compile_sampler, scene_sampler
+
+__all__ = ["SAMPLERS", "Sampler", "compile_sampler", "scene_sampler"]

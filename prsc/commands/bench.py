@@ -1,0 +1,151 @@
+"""`prsc bench FILE... [--json]`: every sampler side by side on each spec.
+
+For each spec and sampler (exact, hit-and-run, rejection): scenes per second on one core
+(scene JSON dicts, measured in process CPU time so other load on the machine does not
+count; wall-clock rate shown too), rejections per scene by cause (the paper's Table II
+causes: collision, relative position, containment, require; plus dead ends), and the peak
+resident memory of the process that sampled. Each measurement runs in a fresh forked
+process so peaks do not carry over.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import os
+import resource
+import sys
+import time
+from typing import Any
+
+from prsc.errors import PrscError
+
+SAMPLERS = ("exact", "hit-and-run", "rejection")
+DEFAULT_SCENES = {"exact": 5000, "hit-and-run": 200, "rejection": 100}
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register `prsc bench`."""
+    parser = subparsers.add_parser(
+        "bench", help="compare the samplers on specs (speed, rejections, memory)", description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("files", nargs="+", metavar="FILE", help=".prs specs")
+    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--samplers", default=",".join(SAMPLERS), help="comma-separated subset of exact,hit-and-run,rejection")
+    parser.add_argument("-n", "--scenes", type=int, default=None,
+                        help="scenes per sampler (default: exact 5000, hit-and-run 200, rejection 100)")
+    parser.add_argument("--seconds", type=float, default=20.0, help="stop a measurement after this much CPU time (default 20)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    parser.add_argument("--walk-length", type=int, default=100, help="hit-and-run steps per sample (default 100)")
+
+
+def measure(path: str, include: list[str], sampler_name: str, n: int, seconds: float, seed: int, walk_length: int) -> dict[str, Any]:
+    """Sample up to n scenes (or `seconds` of CPU time) and report rates, rejections and memory."""
+    from prsc.sampling import compile_sampler
+    from prsc.sampling.scene_json import scene_json
+    from prsc.sampling.stats import RejectionStats
+
+    sampler = compile_sampler(path, include, sampler_name, walk_length=walk_length)
+    # One scene first: imports and lazily prepared regions are set-up, not per-scene cost.
+    sampler.scene(seed, 10**9)
+    stats = RejectionStats()
+    cpu0, wall0 = time.process_time(), time.perf_counter()
+    done = 0
+    for index in range(n):
+        result = sampler.sample(seed, index)
+        scene_json(sampler.spec, seed, index, result.params, result.objects, sampler.templates)
+        stats.merge(result.stats)
+        done += 1
+        if time.process_time() - cpu0 > seconds:
+            break
+    cpu = max(time.process_time() - cpu0, 1e-9)
+    wall = max(time.perf_counter() - wall0, 1e-9)
+    by_cause = stats.by_cause()
+    return {
+        "scenes": done,
+        "scenes_per_s": done / cpu,
+        "wall_scenes_per_s": done / wall,
+        "rejections_per_scene": sum(by_cause.values()) / done,
+        "rejections_by_cause": {cause: count / done for cause, count in by_cause.items()},
+        "peak_memory_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+    }
+
+
+def _child(conn: Any, args: tuple) -> None:
+    try:
+        conn.send(("ok", measure(*args)))
+    except PrscError as error:
+        from prsc.errors import format_error
+
+        conn.send(("error", format_error(error)))
+    except Exception as error:  # report, do not hang the parent
+        conn.send(("error", f"prsc: error: {type(error).__name__}: {error}\n"))
+    finally:
+        conn.close()
+
+
+def measure_isolated(*args: Any) -> dict[str, Any]:
+    """`measure` in a fresh forked process (its own peak memory); PrscError on failure."""
+    ctx = multiprocessing.get_context("fork")
+    parent, child = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(child, args))
+    proc.start()
+    child.close()
+    try:
+        status, payload = parent.recv()
+    except EOFError:
+        status, payload = "error", "prsc: error: the benchmark process died\n"
+    proc.join()
+    if status != "ok":
+        raise PrscError(payload.strip().removeprefix("prsc: error: "))
+    return payload
+
+
+def _table(results: dict[str, dict[str, dict[str, Any]]]) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table(title="prsc bench: samplers side by side (one core)")
+    for col in ("spec", "sampler", "scenes", "scenes/s", "wall/s", "rejections/scene",
+                "collision", "relative", "containment", "require", "dead end", "peak MB"):
+        table.add_column(col, justify="left" if col in ("spec", "sampler") else "right")
+    for spec, per in results.items():
+        for name, r in per.items():
+            c = r["rejections_by_cause"]
+            table.add_row(
+                os.path.basename(spec), name, str(r["scenes"]), f"{r['scenes_per_s']:,.1f}", f"{r['wall_scenes_per_s']:,.1f}",
+                f"{r['rejections_per_scene']:.2f}", f"{c.get('collision', 0):.2f}", f"{c.get('relative position', 0):.2f}",
+                f"{c.get('containment', 0):.2f}", f"{c.get('require', 0):.2f}", f"{c.get('dead end', 0):.2f}",
+                f"{r['peak_memory_mb']:.0f}",
+            )
+    console = Console()
+    if not console.is_terminal:
+        console = Console(width=170)  # a pipe or file: do not squeeze the columns to 80
+    console.print(table)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Benchmark every spec with every chosen sampler."""
+    names = [s.strip() for s in args.samplers.split(",") if s.strip()]
+    unknown = [s for s in names if s not in SAMPLERS]
+    if unknown or not names:
+        raise PrscError(f"unknown sampler {unknown[0] if unknown else '(none)'!r} (choose from {', '.join(SAMPLERS)})")
+    from prsc.ir import compile_program
+
+    for path in args.files:
+        compile_program(path, args.include)  # report spec errors before forking
+    results: dict[str, dict[str, dict[str, Any]]] = {}
+    for path in args.files:
+        results[path] = {}
+        for name in names:
+            n = args.scenes if args.scenes is not None else DEFAULT_SCENES[name]
+            results[path][name] = measure_isolated(path, args.include, name, n, args.seconds, args.seed, args.walk_length)
+    if args.json:
+        json.dump({"specs": results}, sys.stdout, indent=1)
+        sys.stdout.write("\n")
+    else:
+        _table(results)
+    return 0

@@ -1,0 +1,101 @@
+"""Per-scene evaluation state: the scene's random stream, memoised draws, placed objects."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from prsc.constraints.values import ObjectValue
+
+# Uniforms are fetched from the generator in blocks: one numpy call instead of one per
+# draw. The block boundaries depend only on how many draws came before, so the stream is
+# still a pure function of (seed, index).
+_BLOCK = 32
+
+
+class SceneContext:
+    """Everything one scene's evaluation reads and writes.
+
+    `level` is the index of the object being placed (-1 before the first): every memoised
+    draw or variable is journalled with it so a backtrack to object k forgets exactly the
+    values drawn while placing objects k, k+1, ...
+    """
+
+    __slots__ = ("rng", "_buffer", "draws", "variables", "objects", "journal", "level", "active_requires")
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+        self._buffer: list[float] = []
+        self.draws: dict[int, Any] = {}
+        self.variables: dict[str, Any] = {}
+        self.objects: dict[str, ObjectValue] = {}
+        self.journal: list[tuple[int, int, Any]] = []  # (level, 0 draw / 1 variable, key)
+        self.level = -1
+        self.active_requires: frozenset[int] = frozenset()
+
+    def uniform(self) -> float:
+        """A uniform draw from [0, 1)."""
+        buffer = self._buffer
+        if not buffer:
+            buffer.extend(self.rng.random(_BLOCK).tolist())
+            buffer.reverse()
+        return buffer.pop()
+
+    def normal(self) -> float:
+        """A standard normal draw."""
+        return float(self.rng.standard_normal())
+
+    def remember_draw(self, draw_id: int, value: Any) -> None:
+        """Memoise a distribution's value for the rest of this scene (or until a backtrack)."""
+        self.draws[draw_id] = value
+        self.journal.append((self.level, 0, draw_id))
+
+    def remember_variable(self, name: str, value: Any) -> None:
+        """Memoise a global variable's value."""
+        self.variables[name] = value
+        self.journal.append((self.level, 1, name))
+
+    def rollback(self, level: int) -> None:
+        """Forget every draw and variable memoised while placing objects >= level."""
+        journal = self.journal
+        while journal and journal[-1][0] >= level:
+            _, kind, key = journal.pop()
+            if kind == 0:
+                self.draws.pop(key, None)
+            else:
+                self.variables.pop(key, None)
+
+
+class NotStatic(Exception):
+    """Raised by StaticContext when a value would need a random draw."""
+
+
+class _RaisingDict(dict):
+    """A memo that refuses to be read or written: any random value makes a probe fail."""
+
+    def get(self, key: Any, default: Any = None) -> Any:
+        raise NotStatic
+
+    def __setitem__(self, key: Any, value: Any) -> None:
+        raise NotStatic
+
+
+class StaticContext(SceneContext):
+    """A context for compile-time probes: the objects known so far, and no randomness.
+
+    Evaluating a closure against it either gives the value it has in every scene or
+    raises NotStatic (or a PrscError about an object not known at compile time).
+    """
+
+    def __init__(self, objects: dict[str, ObjectValue]) -> None:
+        super().__init__(None)  # type: ignore[arg-type]
+        self.draws = _RaisingDict()
+        self.variables = _RaisingDict()
+        self.objects = dict(objects)
+
+    def uniform(self) -> float:
+        raise NotStatic
+
+    def normal(self) -> float:
+        raise NotStatic

@@ -1,0 +1,547 @@
+"""Compile IR expressions to closures `fn(ctx) -> value`, folding constants.
+
+A subexpression whose value cannot change from scene to scene (literals, arithmetic on
+them, properties of objects whose value is already known at compile time) is evaluated
+once here; everything else becomes a small closure. Distributions are memoised per scene
+by draw_id (LANGUAGE.md section 3: one draw per scene, shared by all uses).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from prsc.constraints import regions
+from prsc.constraints.context import SceneContext
+from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
+from prsc.errors import PrscError, Span
+from prsc.ir import model as ir
+
+Fn = Callable[[SceneContext], Any]
+_MISSING = object()
+
+# Unit offsets of face-point words in the object's local frame.
+_FACE_AXES = {
+    "top": (2, 1.0),
+    "bottom": (2, -1.0),
+    "front": (1, 1.0),
+    "back": (1, -1.0),
+    "right": (0, 1.0),
+    "left": (0, -1.0),
+}
+
+_MATH: dict[str, Callable[..., float]] = {
+    "sin": math.sin,
+    "cos": math.cos,
+    "tan": math.tan,
+    "sqrt": math.sqrt,
+    "abs": abs,
+    "min": min,
+    "max": max,
+    "hypot": math.hypot,
+    "atan2": math.atan2,
+}
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """A compiled expression: `fn(ctx)`; when `const`, `value` is its value in every scene."""
+
+    fn: Fn
+    const: bool
+    value: Any = None
+
+
+def constant(value: Any) -> Compiled:
+    """A compiled constant."""
+    return Compiled(lambda ctx: value, True, value)
+
+
+class StaticFacts:
+    """What is known about objects at compile time (filled in object by object by lowering)."""
+
+    def __init__(self) -> None:
+        self.positions: dict[str, np.ndarray] = {}
+        self.rotations: dict[str, np.ndarray] = {}
+        self.props: dict[str, dict[str, Any]] = {}
+        # Objects whose position, rotation and size are all known: stand-ins for folding.
+        self.objects: dict[str, ObjectValue] = {}
+
+    def prop(self, name: str, prop: str) -> Any:
+        """The known value of an object's property, else _MISSING."""
+        if prop == "position":
+            return self.positions.get(name, _MISSING)
+        if prop == "orientation":
+            return self.rotations.get(name, _MISSING)
+        if prop in ("x", "y", "z"):
+            pos = self.positions.get(name)
+            return _MISSING if pos is None else float(pos["xyz".index(prop)])
+        return self.props.get(name, {}).get(prop, _MISSING)
+
+
+# ---------------------------------------------------------------- runtime helpers
+
+
+def _error(message: str, span: Span | None) -> PrscError:
+    return PrscError(message, span)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _is_vector(v: Any) -> bool:
+    return isinstance(v, np.ndarray) and v.shape == (3,)
+
+
+def _arith_operand(v: Any) -> Any:
+    """Face points and objects act as their positions in arithmetic (compat)."""
+    if isinstance(v, (OrientedPoint, ObjectValue)):
+        return as_position(v)
+    return v
+
+
+def binary(op: str, a: Any, b: Any, span: Span | None) -> Any:
+    """`a op b` for scalars, vectors and strings."""
+    a = _arith_operand(a)
+    b = _arith_operand(b)
+    if _is_number(a) and _is_number(b):
+        if op == "+":
+            return a + b
+        if op == "-":
+            return a - b
+        if op == "*":
+            return a * b
+        if op == "/":
+            if b == 0:
+                raise _error("division by zero", span)
+            return a / b
+    elif _is_vector(a) and _is_vector(b) and op in "+-":
+        return a + b if op == "+" else a - b
+    elif _is_vector(a) and _is_number(b) and op in "*/":
+        if op == "/" and b == 0:
+            raise _error("division by zero", span)
+        return a * b if op == "*" else a / b
+    elif _is_number(a) and _is_vector(b) and op == "*":
+        return b * a
+    elif isinstance(a, str) and isinstance(b, str) and op == "+":
+        return a + b
+    raise _error(f"cannot apply {op!r} to {describe(a)} and {describe(b)}", span)
+
+
+def describe(v: Any) -> str:
+    """A short name of a value's kind for error messages."""
+    if isinstance(v, bool):
+        return "a bool"
+    if _is_number(v):
+        return "a number"
+    if _is_vector(v):
+        return "a vector"
+    if isinstance(v, str):
+        return "a string"
+    if isinstance(v, ObjectValue):
+        return "an object"
+    if isinstance(v, OrientedPoint):
+        return "a face point"
+    if isinstance(v, RegionValue):
+        return "a region"
+    if isinstance(v, tuple):
+        return "a list"
+    return type(v).__name__
+
+
+def compare(op: str, a: Any, b: Any, span: Span | None) -> bool:
+    """`a op b` for numbers (and ==/!= for anything)."""
+    if op in ("==", "!="):
+        if _is_vector(a) or _is_vector(b):
+            equal = _is_vector(a) and _is_vector(b) and bool(np.all(a == b))
+        else:
+            equal = a == b
+        return equal if op == "==" else not equal
+    if not (_is_number(a) and _is_number(b)):
+        raise _error(f"cannot compare {describe(a)} and {describe(b)} with {op!r}", span)
+    if op == "<":
+        return a < b
+    if op == "<=":
+        return a <= b
+    if op == ">":
+        return a > b
+    if op == ">=":
+        return a >= b
+    raise _error(f"unknown comparison {op!r}", span)
+
+
+def truthy(v: Any, span: Span | None) -> bool:
+    """A value used as a condition."""
+    if isinstance(v, bool):
+        return v
+    if _is_number(v):
+        return v != 0
+    raise _error(f"expected a condition, got {describe(v)}", span)
+
+
+def face_point(target: Any, words: tuple[str, ...], span: Span | None) -> OrientedPoint:
+    """`top back X` etc.: X.position + R_X . offset, carrying X's orientation."""
+    if not isinstance(target, ObjectValue):
+        raise _error(f"a face point needs an object, got {describe(target)}", span)
+    if target.position is None or target.rotation is None or target.dims is None:
+        raise _error(f"{target.name} is not placed yet here", span)
+    offset = [0.0, 0.0, 0.0]
+    for word in words:
+        axis, sign = _FACE_AXES[word]
+        offset[axis] = sign * target.dims[axis] * 0.5
+    return OrientedPoint(target.position + target.rotation @ np.array(offset), target.rotation)
+
+
+def relative_to(value: Any, frame: Any, span: Span | None) -> np.ndarray:
+    """`V relative to X`: X.position + R_X V for an object or face point, X + V for a vector."""
+    v = _arith_operand(value)
+    if not _is_vector(v):
+        raise _error(f"'relative to' needs a vector on its left, got {describe(value)}", span)
+    if isinstance(frame, (ObjectValue, OrientedPoint)):
+        pos = as_position(frame)
+        if pos is None or frame.rotation is None:
+            raise _error("the frame of 'relative to' is not placed yet here", span)
+        return pos + frame.rotation @ v
+    if _is_vector(frame):
+        return frame + v
+    raise _error(f"'relative to' needs an object or a vector on its right, got {describe(frame)}", span)
+
+
+def attribute(target: Any, prop: str, ctx: SceneContext | None, span: Span | None) -> Any:
+    """`target.prop` on an object, a face point or a vector."""
+    if isinstance(target, ObjectValue):
+        return target.get(prop, ctx, span)
+    if isinstance(target, OrientedPoint):
+        if prop == "position":
+            return target.position
+        if prop == "orientation":
+            return target.rotation
+        if prop in ("x", "y", "z"):
+            return float(target.position["xyz".index(prop)])
+    elif _is_vector(target):
+        if prop in ("x", "y", "z"):
+            return float(target["xyz".index(prop)])
+        if prop == "position":
+            return target
+    raise _error(f"{describe(target)} has no attribute {prop!r}", span)
+
+
+def _number(v: Any, what: str, span: Span | None) -> float:
+    if not _is_number(v):
+        raise _error(f"{what} must be a number, got {describe(v)}", span)
+    return float(v)
+
+
+# ---------------------------------------------------------------- compiler
+
+
+class ExprCompiler:
+    """Compiles the expressions of one Program; knows variables and static object facts."""
+
+    def __init__(self, program: ir.Program, facts: StaticFacts | None = None) -> None:
+        self.program = program
+        self.facts = facts if facts is not None else StaticFacts()
+        self._variables = {v.name: v for v in program.variables}
+        self._var_compiled: dict[str, Compiled] = {}
+        self._var_busy: set[str] = set()
+
+    # -- entry point
+    def compile(self, expr: ir.Expr) -> Compiled:
+        """Compile one expression."""
+        method = getattr(self, "_c_" + type(expr).__name__, None)
+        if method is None:
+            raise PrscError(f"unsupported expression ({type(expr).__name__})", expr.span)
+        return method(expr)
+
+    # -- leaves
+    def _c_Const(self, e: ir.Const) -> Compiled:
+        value = e.value
+        if _is_number(value):
+            value = float(value)
+        return constant(value)
+
+    def _c_VectorExpr(self, e: ir.VectorExpr) -> Compiled:
+        parts = [self.compile(c) for c in (e.x, e.y, e.z)]
+        span = e.span
+        if all(p.const for p in parts):
+            return constant(np.array([_number(p.value, "a vector component", span) for p in parts]))
+        fx, fy, fz = (p.fn for p in parts)
+
+        def vector(ctx: SceneContext) -> np.ndarray:
+            x, y, z = fx(ctx), fy(ctx), fz(ctx)
+            if not (_is_number(x) and _is_number(y) and _is_number(z)):
+                raise _error("vector components must be numbers", span)
+            return np.array((x, y, z), dtype=float)
+
+        return Compiled(vector, False)
+
+    def _c_ListExpr(self, e: ir.ListExpr) -> Compiled:
+        items = [self.compile(i) for i in e.items]
+        if all(i.const for i in items):
+            return constant(tuple(i.value for i in items))
+        fns = [i.fn for i in items]
+        return Compiled(lambda ctx: tuple(f(ctx) for f in fns), False)
+
+    def _c_ObjectRef(self, e: ir.ObjectRef) -> Compiled:
+        name, span = e.name, e.span
+
+        def obj(ctx: SceneContext) -> ObjectValue:
+            value = ctx.objects.get(name)
+            if value is None:
+                raise _error(f"object {name} is not placed yet here", span)
+            return value
+
+        # An object whose geometry is known at compile time is a constant for folding
+        # (its stand-in carries position, rotation and size); at run time the closure
+        # still returns the scene's own object, whose geometry is the same.
+        stand_in = self.facts.objects.get(name)
+        return Compiled(obj, stand_in is not None, stand_in)
+
+    def _c_VarRef(self, e: ir.VarRef) -> Compiled:
+        name = e.name
+        compiled = self._var_compiled.get(name)
+        if compiled is None:
+            var = self._variables.get(name)
+            if var is None:
+                raise PrscError(f"unknown variable {name!r}", e.span)
+            if name in self._var_busy:
+                raise PrscError(f"variable {name!r} is defined in terms of itself", e.span)
+            self._var_busy.add(name)
+            try:
+                inner = self.compile(var.value)
+            finally:
+                self._var_busy.discard(name)
+            if inner.const:
+                compiled = inner
+            else:
+                fn = inner.fn
+
+                def variable(ctx: SceneContext) -> Any:
+                    value = ctx.variables.get(name, _MISSING)
+                    if value is _MISSING:
+                        value = fn(ctx)
+                        ctx.remember_variable(name, value)
+                    return value
+
+                compiled = Compiled(variable, False)
+            self._var_compiled[name] = compiled
+        return compiled
+
+    def _c_PropertyRef(self, e: ir.PropertyRef) -> Compiled:
+        prop, span = e.prop, e.span
+        if isinstance(e.target, ir.ObjectRef):
+            known = self.facts.prop(e.target.name, prop)
+            if known is not _MISSING:
+                return constant(known)
+        target = self.compile(e.target)
+        if target.const and not isinstance(target.value, ObjectValue):
+            return constant(attribute(target.value, prop, None, span))
+        tf = target.fn
+        return Compiled(lambda ctx: attribute(tf(ctx), prop, ctx, span), False)
+
+    def _c_SelfRef(self, e: ir.SelfRef) -> Compiled:
+        raise PrscError("'self' outside a class default", e.span)
+
+    def _c_FacePoint(self, e: ir.FacePoint) -> Compiled:
+        words, span = e.words, e.span
+        if isinstance(e.target, ir.ObjectRef):
+            name = e.target.name
+            pos = self.facts.prop(name, "position")
+            rot = self.facts.prop(name, "orientation")
+            dims = [self.facts.prop(name, d) for d in ("width", "length", "height")]
+            if pos is not _MISSING and rot is not _MISSING and all(d is not _MISSING for d in dims):
+                stand_in = ObjectValue(name, "", span, pos, rot, tuple(float(d) for d in dims))
+                return constant(face_point(stand_in, words, span))
+        tf = self.compile(e.target).fn
+        return Compiled(lambda ctx: face_point(tf(ctx), words, span), False)
+
+    def _c_RelativeTo(self, e: ir.RelativeTo) -> Compiled:
+        value, frame, span = self.compile(e.value), self.compile(e.frame), e.span
+        if value.const and frame.const:
+            return constant(relative_to(value.value, frame.value, span))
+        vf, ff = value.fn, frame.fn
+        return Compiled(lambda ctx: relative_to(vf(ctx), ff(ctx), span), False)
+
+    def _c_BinOp(self, e: ir.BinOp) -> Compiled:
+        left, right, op, span = self.compile(e.left), self.compile(e.right), e.op, e.span
+        if left.const and right.const:
+            return constant(binary(op, left.value, right.value, span))
+        lf, rf = left.fn, right.fn
+        return Compiled(lambda ctx: binary(op, lf(ctx), rf(ctx), span), False)
+
+    def _c_UnaryOp(self, e: ir.UnaryOp) -> Compiled:
+        operand, op, span = self.compile(e.operand), e.op, e.span
+
+        def unary(v: Any) -> Any:
+            if op == "not":
+                return not truthy(v, span)
+            v = _arith_operand(v)
+            if not (_is_number(v) or _is_vector(v)):
+                raise _error(f"cannot apply unary {op!r} to {describe(v)}", span)
+            return -v if op == "-" else v
+
+        if operand.const:
+            return constant(unary(operand.value))
+        f = operand.fn
+        return Compiled(lambda ctx: unary(f(ctx)), False)
+
+    def _c_Compare(self, e: ir.Compare) -> Compiled:
+        left, right, op, span = self.compile(e.left), self.compile(e.right), e.op, e.span
+        if left.const and right.const:
+            return constant(compare(op, left.value, right.value, span))
+        lf, rf = left.fn, right.fn
+        return Compiled(lambda ctx: compare(op, lf(ctx), rf(ctx), span), False)
+
+    def _c_BoolOp(self, e: ir.BoolOp) -> Compiled:
+        operands = [self.compile(o) for o in e.operands]
+        is_and, span = e.op == "and", e.span
+        if all(o.const for o in operands):
+            values = [truthy(o.value, span) for o in operands]
+            return constant(all(values) if is_and else any(values))
+        fns = [o.fn for o in operands]
+        if is_and:
+            return Compiled(lambda ctx: all(truthy(f(ctx), span) for f in fns), False)
+        return Compiled(lambda ctx: any(truthy(f(ctx), span) for f in fns), False)
+
+    def _c_Call(self, e: ir.Call) -> Compiled:
+        func = _MATH.get(e.func)
+        span = e.span
+        if func is None:
+            raise PrscError(f"unknown function {e.func!r}", span)
+        args = [self.compile(a) for a in e.args]
+
+        def call(values: list[Any]) -> float:
+            nums = [_number(v, f"an argument of {e.func}", span) for v in values]
+            try:
+                return float(func(*nums))
+            except (ValueError, TypeError, OverflowError) as error:
+                raise _error(f"{e.func}: {error}", span) from error
+
+        if all(a.const for a in args):
+            return constant(call([a.value for a in args]))
+        fns = [a.fn for a in args]
+        return Compiled(lambda ctx: call([f(ctx) for f in fns]), False)
+
+    def _c_Distribution(self, e: ir.Distribution) -> Compiled:
+        args = [self.compile(a) for a in e.args]
+        weights = [self.compile(w) for w in e.weights]
+        draw = _sampler_for(e, [a.fn for a in args], [w.fn for w in weights])
+        draw_id = e.draw_id
+
+        def distribution(ctx: SceneContext) -> Any:
+            value = ctx.draws.get(draw_id, _MISSING)
+            if value is _MISSING:
+                value = draw(ctx)
+                ctx.remember_draw(draw_id, value)
+            return value
+
+        return Compiled(distribution, False)
+
+    def _c_RegionExpr(self, e: ir.RegionExpr) -> Compiled:
+        names = [name for name, _ in e.args]
+        args = [self.compile(a) for _, a in e.args]
+        kind, span = e.kind, e.span
+
+        def build(values: list[Any]) -> RegionValue:
+            a = dict(zip(names, values))
+            if kind == "cuboid":
+                return regions.cuboid(a["position"], a["orientation"], a["width"], a["length"], a["height"], span)
+            if kind == "rectangle":
+                return regions.rectangle(a["position"], a["orientation"], a["width"], a["length"], span)
+            if kind == "halfspace":
+                return regions.halfspace(a["point"], a["normal"], a.get("dist", 0.0), span)
+            if kind == "polygon":
+                return regions.polygon(a["vertices"], span)
+            if kind == "polyhedron":
+                return regions.polyhedron(a["vertices"], span)
+            if kind == "intersection":
+                return regions.intersection(a["regions"], span)
+            if kind == "all":
+                return regions.everything()
+            if kind == "empty":
+                return regions.empty()
+            raise _error(f"unknown region kind {kind!r}", span)
+
+        if all(a.const for a in args):
+            return constant(build([a.value for a in args]))
+        fns = [a.fn for a in args]
+        return Compiled(lambda ctx: build([f(ctx) for f in fns]), False)
+
+
+def _sampler_for(e: ir.Distribution, args: list[Fn], weights: list[Fn]) -> Fn:
+    """The draw function of one distribution node (no memoisation)."""
+    kind, span = e.kind, e.span
+
+    def num(f: Fn, ctx: SceneContext, what: str) -> float:
+        return _number(f(ctx), what, span)
+
+    if kind == "range":
+        lo_f, hi_f = args
+
+        def draw_range(ctx: SceneContext) -> float:
+            lo, hi = num(lo_f, ctx, "a range bound"), num(hi_f, ctx, "a range bound")
+            if hi < lo:
+                raise _error(f"empty range ({lo}, {hi})", span)
+            return lo + (hi - lo) * ctx.uniform()
+
+        return draw_range
+    if kind == "normal":
+        mean_f, sd_f = args
+
+        def draw_normal(ctx: SceneContext) -> float:
+            mean, sd = num(mean_f, ctx, "a mean"), num(sd_f, ctx, "a standard deviation")
+            if sd < 0:
+                raise _error("a standard deviation must be >= 0", span)
+            return mean + sd * ctx.normal()
+
+        return draw_normal
+    if kind == "truncnormal":
+        mean_f, sd_f, lo_f, hi_f = args
+
+        def draw_truncnormal(ctx: SceneContext) -> float:
+            mean, sd = num(mean_f, ctx, "a mean"), num(sd_f, ctx, "a standard deviation")
+            lo, hi = num(lo_f, ctx, "a bound"), num(hi_f, ctx, "a bound")
+            if not (sd > 0 and lo < hi):
+                raise _error("TruncatedNormal needs sd > 0 and low < high", span)
+            # Inverse CDF on [Phi(a), Phi(b)]: exact, one uniform per draw.
+            pa, pb = float(ndtr((lo - mean) / sd)), float(ndtr((hi - mean) / sd))
+            if not pb > pa:
+                raise _error("TruncatedNormal's interval has no probability mass", span)
+            value = mean + sd * float(ndtri(pa + (pb - pa) * ctx.uniform()))
+            return min(max(value, lo), hi)
+
+        return draw_truncnormal
+    if kind == "uniform":
+        if not args:
+            raise PrscError("Uniform needs at least one option", span)
+        options = args
+
+        def draw_option(ctx: SceneContext) -> Any:
+            return options[min(int(ctx.uniform() * len(options)), len(options) - 1)](ctx)
+
+        return draw_option
+    if kind == "discrete":
+        if not args or len(args) != len(weights):
+            raise PrscError("Discrete needs one weight per option", span)
+        options = args
+
+        def draw_discrete(ctx: SceneContext) -> Any:
+            w = [num(f, ctx, "a weight") for f in weights]
+            total = sum(w)
+            if any(x < 0 for x in w) or not total > 0:
+                raise _error("Discrete weights must be >= 0 and not all 0", span)
+            u = ctx.uniform() * total
+            acc = 0.0
+            for option, weight in zip(options, w):
+                acc += weight
+                if u < acc:
+                    return option(ctx)
+            return options[-1](ctx)
+
+        return draw_discrete
+    raise PrscError(f"unknown distribution {kind!r}", span)

@@ -1,0 +1,162 @@
+"""Position specifiers as labelled rows on the object's centre p (LANGUAGE.md section 4).
+
+Each function takes the concrete values of one scene and returns a Polytope whose rows
+all carry `label`. `support` is the placed object's support function s(n).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from prsc.constraints.model import Support
+from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
+from prsc.errors import PrscError, Span
+from prsc.geometry.polytope import Polytope
+
+_EYE = np.eye(3)
+_UP = np.array([0.0, 0.0, 1.0])
+
+# Direction words -> the side's axis in the target's frame.
+DIRECTION_AXES = {
+    "left": np.array([-1.0, 0.0, 0.0]),
+    "right": np.array([1.0, 0.0, 0.0]),
+    "ahead": np.array([0.0, 1.0, 0.0]),
+    "behind": np.array([0.0, -1.0, 0.0]),
+    "above": np.array([0.0, 0.0, 1.0]),
+    "below": np.array([0.0, 0.0, -1.0]),
+}
+
+
+def _point_rows(point: np.ndarray, label: int) -> Polytope:
+    """p = point."""
+    return Polytope(np.zeros((0, 3)), np.zeros(0), _EYE, np.asarray(point, dtype=float), np.zeros(0, np.int64), np.full(3, label))
+
+
+def _placed(target: ObjectValue, span: Span | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if target.position is None or target.rotation is None or target.dims is None:
+        raise PrscError(f"{target.name} is not placed yet here", span)
+    return target.position, target.rotation, np.asarray(target.dims, dtype=float)
+
+
+def _vector(value: Any, what: str, span: Span | None) -> np.ndarray:
+    pos = as_position(value)
+    if pos is None:
+        raise PrscError(f"{what} must be an object, a face point or a vector", span)
+    return np.asarray(pos, dtype=float)
+
+
+def _scalar(value: Any, what: str, span: Span | None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise PrscError(f"{what} must be a number", span)
+    return float(value)
+
+
+def rows_at(point: Any, label: int, span: Span | None) -> Polytope:
+    """`at V`: p = V."""
+    return _point_rows(_vector(point, "the point of 'at'", span), label)
+
+
+def rows_beyond(target: Any, by: Any, origin: Any, label: int, span: Span | None) -> Polytope:
+    """`beyond X by d from P`: p = X + d unit(X - P), or a vector d in the frame facing from P to X."""
+    x = _vector(target, "the target of 'beyond'", span)
+    p = _vector(origin, "the origin of 'beyond'", span)
+    if isinstance(by, np.ndarray):
+        forward = x - p
+        forward = np.array([forward[0], forward[1], 0.0])
+        norm = float(np.linalg.norm(forward))
+        if not norm > 0:
+            raise PrscError("'beyond' with a vector distance needs a horizontal direction from P to X", span)
+        y = forward / norm
+        xaxis = np.cross(y, _UP)
+        return _point_rows(x + by[0] * xaxis + by[1] * y + by[2] * _UP, label)
+    d = _scalar(by, "the distance of 'beyond'", span)
+    direction = x - p
+    norm = float(np.linalg.norm(direction))
+    if not norm > 0:
+        raise PrscError("'beyond X from P' needs X and P to differ", span)
+    return _point_rows(x + d * direction / norm, label)
+
+
+def rows_in(region: Any, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:
+    """`[completely] in R`: p in R, or the whole box in R (erosion of R's inequality rows)."""
+    if not isinstance(region, RegionValue):
+        raise PrscError("'in' needs a region", span)
+    poly = region.poly
+    b = poly.b - support(poly.A) if completely and len(poly.b) else poly.b
+    return Polytope(poly.A, b, poly.C, poly.d, np.full(len(b), label), np.full(len(poly.d), label))
+
+
+def rows_on(target: Any, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:
+    """`[completely] on X` for an object, a planar region or a point."""
+    if isinstance(target, ObjectValue):
+        pos, rot, dims = _placed(target, span)
+        u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
+        top = pos + n * (dims[2] * 0.5)
+        s = support(np.stack([n, u, v]))
+        su, sv = (s[1], s[2]) if completely else (0.0, 0.0)
+        a = np.stack([u, -u, v, -v])
+        tu, tv = float(u @ top), float(v @ top)
+        b = np.array([tu + dims[0] * 0.5 - su, -tu + dims[0] * 0.5 - su, tv + dims[1] * 0.5 - sv, -tv + dims[1] * 0.5 - sv])
+        return Polytope(a, b, n[None, :], np.array([n @ top + s[0]]), np.full(4, label), np.full(1, label))
+    if isinstance(target, RegionValue):
+        return _rows_on_surface(target, completely, support, label, span)
+    point = as_position(target)
+    if point is not None:
+        return _point_rows(point + _UP * float(support(_UP[None, :])[0]), label)
+    raise PrscError("'on' needs an object, a planar region or a point", span)
+
+
+def _rows_on_surface(region: RegionValue, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:
+    """On a planar region: rest on the plane, centre projecting inside (footprint inside if completely)."""
+    if region.normal is None:
+        raise PrscError(f"'on' needs a surface, but this {region.kind} region is solid; use 'in'", span)
+    n = region.normal
+    poly = region.poly
+    # The plane n.x = offset: taken from the equality row parallel to n.
+    offset = None
+    for c, d in zip(poly.C, poly.d):
+        cn = float(c @ n)
+        if abs(abs(cn) - np.linalg.norm(c)) > 1e-9 * max(1.0, float(np.linalg.norm(c))):
+            raise PrscError("'on' needs a planar region (this intersection is a line or a point)", span)
+        if offset is None:
+            offset = float(d) / cn
+    if offset is None:
+        raise PrscError("'on' needs a planar region", span)
+    sn = float(support(n[None, :])[0])
+    a = poly.A
+    # Project p back onto the plane: p_proj = p - s(n) n, so a.p_proj <= b  <=>  a.p <= b + s(n) a.n.
+    b = poly.b + sn * (a @ n)
+    if completely and len(b):
+        in_plane = a - np.outer(a @ n, n)
+        b = b - support(in_plane)
+    return Polytope(a, b, n[None, :], np.array([offset + sn]), np.full(len(b), label), np.full(1, label))
+
+
+def _frame(target: Any, span: Span | None) -> tuple[np.ndarray, np.ndarray]:
+    """(point, rotation) of a direction/aligned target: object, face point or vector (world axes)."""
+    if isinstance(target, ObjectValue):
+        pos, rot, _ = _placed(target, span)
+        return pos, rot
+    if isinstance(target, OrientedPoint):
+        return target.position, target.rotation
+    if isinstance(target, np.ndarray) and target.shape == (3,):
+        return target, _EYE
+    raise PrscError("expected an object, a face point or a vector", span)
+
+
+def rows_direction(relation: str, target: Any, by: Any, support: Support, label: int, span: Span | None) -> Polytope:
+    """`left of X by d` etc.: n.(p - X) >= d + s(n), n the side's axis in X's frame."""
+    point, rot = _frame(target, span)
+    n = rot @ DIRECTION_AXES[relation]
+    d = 0.0 if by is None else _scalar(by, f"the distance of '{relation}'", span)
+    offset = float(n @ point) + d + float(support(n[None, :])[0])
+    return Polytope((-n)[None, :], np.array([-offset]), np.zeros((0, 3)), np.zeros(0), np.full(1, label), np.zeros(0, np.int64))
+
+
+def rows_aligned(target: Any, axis: str, label: int, span: Span | None) -> Polytope:
+    """`aligned with X on axis`: p's world coordinate on that axis equals X's."""
+    point = _vector(target, "the target of 'aligned with'", span)
+    i = "xyz".index(axis)
+    return Polytope(np.zeros((0, 3)), np.zeros(0), _EYE[i : i + 1], np.array([point[i]]), np.zeros(0, np.int64), np.full(1, label))

@@ -1,0 +1,389 @@
+"""Sequential scene sampling: objects in dependency order, each uniform on its feasible
+region given the objects before it (LANGUAGE.md section 5.4), never colliding.
+
+Per object: the region of its rules (regions.py); placed objects whose boxes could reach
+it are the only collision candidates (AABB broad phase). With no candidates and no
+rejection-checked require, the first draw is accepted. Otherwise draws are rejected
+against the candidates (exact OBB test); if acceptance stays low the region minus the
+candidates' Minkowski obstacles is decomposed exactly into convex pieces (an empty
+decomposition proves a dead end). Rejection within one object keeps its draw exactly
+uniform on the free part of its region.
+
+A dead end (empty region, or no free position) retries the object's own random values a
+few times, then backtracks to the latest earlier object it depends on or collided with,
+a bounded number of times, then restarts the scene; after a bounded number of restarts
+the scene fails with the rejection statistics (never a hang).
+
+`joint=True` gives the joint uniform law instead: objects are drawn from their regions
+ignoring collisions and rejection-checked requires, and the whole scene is rejected if
+any pair collides or any require fails. (Exact for the joint law when each object's
+region measure does not depend on earlier placements, as with `on`; see docs.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from prsc.constraints.context import SceneContext
+from prsc.constraints.lower import explain_empty
+from prsc.constraints.model import COLLISION, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
+from prsc.constraints.values import ObjectValue
+from prsc.errors import PrscError, Span
+from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.free_space import free_space_sampler
+from prsc.geometry.polytope import Polytope
+from prsc.geometry.sampler import UniformSampler
+from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
+from prsc.sampling.regions import Prepared
+from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params
+from prsc.sampling.seeds import scene_rng
+from prsc.sampling.stats import RejectionStats
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Bounds that make every failure finite."""
+
+    scene_attempts: int = 20  # whole-scene restarts
+    backtracks: int = 30  # per scene attempt
+    object_attempts: int = 8  # redraws of one object's own random values
+    point_draws: int = 200  # rejection draws before the exact free-space decomposition
+    free_draws: int = 50  # draws from the decomposition (only rounding or requires reject these)
+    joint_attempts: int = 100_000  # whole-scene rejections with joint=True
+    # Work per scene over all restarts and backtracks: object placements tried (each may
+    # prepare a region) and positions drawn. Whatever the spec, a scene ends within these.
+    placement_budget: int = 2_000
+    draw_budget: int = 200_000
+
+
+@dataclass
+class SceneResult:
+    """A sampled scene: objects in declaration order, parameter values, rejection counts."""
+
+    objects: list[ObjectValue]
+    params: dict[str, Any]
+    stats: RejectionStats
+    # The scene's final evaluation context (draws, objects): lets `prsc explain` rebuild rows.
+    context: SceneContext | None = None
+
+
+@dataclass
+class _Failure:
+    """What went wrong last, for the error message when a scene cannot be sampled."""
+
+    index: int = -1
+    kind: str = ""
+    rows: Polytope | None = None
+    blockers: list[PlacedBox] = field(default_factory=list)
+    label: int = -1
+
+
+class SequentialSampler:
+    """Exact (or hit-and-run) sequential placement of one compiled spec."""
+
+    def __init__(
+        self,
+        cprog: ConstraintProgram,
+        method: str = "exact",
+        walk_length: int = 100,
+        joint: bool = False,
+        limits: Limits | None = None,
+    ) -> None:
+        if method not in ("exact", "hit-and-run"):
+            raise ValueError(f"unknown method {method!r}")
+        self.cprog = cprog
+        self.method = method
+        self.walk_length = int(walk_length)
+        self.joint = joint
+        self.limits = limits or Limits()
+        self.runtimes = build_runtimes(cprog)
+        self._index = {rt.plan.name: rt.plan.index for rt in self.runtimes}
+        # Requires checked by rejection, per object (the object they are checked after).
+        self._checks: list[tuple[RequireCheck, ...]] = [rt.plan.checks for rt in self.runtimes]
+        self._declarations = {rt.plan.name: rt.plan.span for rt in self.runtimes}
+        # Per object: the earlier objects its rows read (dependencies, anchor, the objects
+        # its specifiers and requires name), and whether re-placing an object can change it.
+        self._reads = [self._objects_read(rt) for rt in self.runtimes]
+        self._movable = [
+            rt.plan.static_position is None or rt.half is None or rt.rotation is None for rt in self.runtimes
+        ]
+        self._placements = 0
+        self._draws = 0
+        self._free_cache: dict[tuple[int, tuple[int, ...]], UniformSampler | None] = {}
+
+    # ------------------------------------------------------------ scenes
+    def sample(self, seed: int, index: int) -> SceneResult:
+        """Scene `index` under `seed`; PrscError if it cannot be sampled within the limits."""
+        ctx = SceneContext(scene_rng(seed, index))
+        stats = RejectionStats(scenes=1)
+        failure = _Failure()
+        attempts = self.limits.joint_attempts if self.joint else self.limits.scene_attempts
+        self._placements = 0
+        self._draws = 0
+        for _ in range(attempts):
+            if self._over_budget():
+                break
+            ctx.rollback(-1)
+            ctx.objects.clear()
+            ctx.level = -1
+            ctx.active_requires = draw_soft_requires(self.cprog, ctx)
+            if not self._scene_checks_hold(ctx, stats, failure):
+                continue
+            placed: list[PlacedBox] = []
+            if not self._place_all(ctx, placed, stats, failure):
+                continue
+            if self.joint and not self._joint_ok(ctx, placed, stats, failure):
+                continue
+            ctx.level = len(self.runtimes)
+            params = evaluate_params(self.cprog, ctx)
+            objects = [ctx.objects[rt.plan.name] for rt in self.runtimes]
+            return SceneResult(objects, params, stats, ctx)
+        raise self._error(seed, index, stats, failure, attempts)
+
+    def _scene_checks_hold(self, ctx: SceneContext, stats: RejectionStats, failure: _Failure) -> bool:
+        for check in self.cprog.scene_checks:
+            if (check.soft is None or check.soft in ctx.active_requires) and not check.test(ctx):
+                stats.add(REQUIRE)
+                failure.kind, failure.label, failure.index = "require", check.label_id, -1
+                return False
+        return True
+
+    def _place_all(self, ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure) -> bool:
+        n = len(self.runtimes)
+        k = 0
+        backtracks = 0
+        while k < n:
+            if self._over_budget():
+                return False
+            blame: set[int] = set()
+            if self._place(k, ctx, placed, stats, failure, blame):
+                k += 1
+                continue
+            backtracks += 1
+            if backtracks > self.limits.backtracks:
+                return False
+            j = self._backtrack_target(k, blame)
+            if j < 0:
+                return False
+            for i in range(j, k + 1):
+                ctx.objects.pop(self.runtimes[i].plan.name, None)
+            placed[:] = [q for q in placed if q.index < j]
+            ctx.rollback(j)
+            k = j
+        return True
+
+    def _backtrack_target(self, k: int, blame: set[int]) -> int:
+        """The latest earlier object worth re-placing (random, and implicated), or -1."""
+        # Objects it collided with are the likeliest culprits; then what its region reads.
+        for group in (blame, self._reads[k]):
+            for i in sorted(group, reverse=True):
+                if i < k and self._movable[i]:
+                    return i
+        return -1
+
+    def _objects_read(self, rt: ObjectRuntime) -> set[int]:
+        plan = rt.plan
+        names = set(plan.depends_on)
+        if plan.region.anchor is not None:
+            names.add(plan.region.anchor)
+        for label_id in [r.label_id for r in plan.region.rules] + [c.label_id for c in plan.checks]:
+            names.update(self.cprog.labels[label_id].refs)
+        return {self._index[n] for n in names if n in self._index}
+
+    # ------------------------------------------------------------ one object
+    def _place(
+        self, k: int, ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure, blame: set[int]
+    ) -> bool:
+        rt = self.runtimes[k]
+        ctx.level = k
+        for _ in range(self.limits.object_attempts):
+            if self._over_budget():
+                return False
+            self._placements += 1
+            ctx.rollback(k)
+            journal_before = len(ctx.journal)
+            obj, half, support = rt.new_value(ctx)
+            try:
+                region, shift = rt.provider.region(ctx, support, rt.support is not None)
+            except EmptyRegionError as error:
+                stats.add(DEAD_END)
+                failure.index, failure.kind = k, "empty"
+                rows = getattr(error, "rows", None)
+                failure.rows = rows if rows is not None else rt.provider.rows(ctx, support)
+                if len(ctx.journal) == journal_before:
+                    return False  # nothing of its own is random: only earlier objects can help
+                continue
+            except UnboundedRegionError as error:
+                raise PrscError(
+                    f"the region of {rt.plan.name} is unbounded: add a workspace or a bounding specifier", rt.plan.span
+                ) from error
+            if self._draw(rt, obj, half, region, shift, ctx, placed, stats, failure, blame):
+                rt.finish(obj, ctx)
+                placed.append(rt.placed_box(obj, half, ctx))
+                return True
+            if len(ctx.journal) == journal_before and failure.kind == "blocked":
+                return False  # proven: no free position, and nothing of its own to redraw
+        return False
+
+    def _draw(
+        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared, shift: np.ndarray | None,
+        ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure, blame: set[int],
+    ) -> bool:
+        """Draw the object's position (and late rotation); True when accepted."""
+        rng = ctx.rng
+        method, walk = self.method, self.walk_length
+        after = rt.after_position
+        reach = rt.reach
+        if reach is None:
+            mode = "exact" if obj.rotation is not None else rt.plan.orientation.bound_mode  # type: ignore[union-attr]
+            reach = aabb_reach(obj.rotation, half, mode)
+        allow = not self.joint and rt.allows_collisions(obj, ctx)
+        candidates: list[PlacedBox] = []
+        if placed and not self.joint and not allow:
+            lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
+            candidates = near(placed, lo, hi, reach)
+        checks = () if self.joint else tuple(c for c in rt.plan.checks if c.soft is None or c.soft in ctx.active_requires)
+        if not candidates and not checks:
+            p = region.draw(rng, method, walk)
+            obj.position = p if shift is None else p + shift
+            if after:
+                obj.rotation = np.asarray(rt.plan.orientation.compute(ctx, obj), dtype=float)  # type: ignore[union-attr]
+            return True
+        if candidates and shift is None and not after and method == "exact" and self._all_static(rt, region, candidates):
+            # Region and obstacles are the same every scene: decompose the free space once.
+            free = self._static_free_space(rt, region, candidates, obj.rotation, half)  # type: ignore[arg-type]
+            if free is None:
+                stats.add(DEAD_END)
+                failure.index, failure.kind, failure.blockers = rt.plan.index, "blocked", list(candidates)
+                blame.update(q.index for q in candidates)
+                return False
+            # The pieces are exactly the collision-free positions (the obstacles' interiors
+            # are where the OBB test says "collides"): only requires can reject a draw.
+            for _ in range(self.limits.free_draws):
+                if self._accept(rt, obj, half, free.sample_one(rng), ctx, [], checks, stats, failure, blame):
+                    return True
+            return False
+        collided = False
+        for _ in range(self.limits.point_draws):
+            self._draws += 1
+            if self._draws > self.limits.draw_budget:
+                return False
+            p = region.draw(rng, method, walk)
+            if self._accept(rt, obj, half, p if shift is None else p + shift, ctx, candidates, checks, stats, failure, blame):
+                return True
+            collided = collided or failure.kind == "blocked"
+        if not candidates or method != "exact":
+            return False
+        # Low acceptance against the placed boxes: decompose the free space exactly. With a
+        # rotation still unknown (`facing toward`), subtract what collides for every yaw
+        # (the obstacles of a box inscribed in the footprint): a superset of the free
+        # space, from which rejection is still exactly uniform, and empty only if there
+        # is no free position at all.
+        poly = region.poly if shift is None else region.poly.translate(shift)
+        if after:
+            mode = rt.plan.orientation.bound_mode  # type: ignore[union-attr]
+            rotation, obstacle_half = np.eye(3), inscribed_half(half, mode)
+        else:
+            rotation, obstacle_half = obj.rotation, half
+        try:
+            free = free_space_sampler(poly, obstacles_for(candidates, rotation, obstacle_half))  # type: ignore[arg-type]
+        except EmptyRegionError:
+            stats.add(DEAD_END)
+            failure.index, failure.kind, failure.blockers = rt.plan.index, "blocked", list(candidates)
+            blame.update(q.index for q in candidates)
+            return False
+        for _ in range(self.limits.free_draws):
+            self._draws += 1
+            if self._accept(rt, obj, half, free.sample_one(rng), ctx, candidates, checks, stats, failure, blame):
+                return True
+        return False
+
+    def _all_static(self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox]) -> bool:
+        """Whether the region and every candidate obstacle are the same objects in every scene."""
+        return region is rt.provider.static_prepared and rt.support is not None and all(
+            q is self.runtimes[q.index].static_box for q in candidates
+        )
+
+    def _static_free_space(
+        self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox], rotation: np.ndarray, half: np.ndarray
+    ) -> UniformSampler | None:
+        """Exact sampler of the static region minus static obstacles (cached); None if nothing is free."""
+        key = (rt.plan.index, tuple(q.index for q in candidates))
+        if key not in self._free_cache:
+            try:
+                free: UniformSampler | None = free_space_sampler(region.poly, obstacles_for(candidates, rotation, half))
+            except EmptyRegionError:
+                free = None
+            self._free_cache[key] = free
+        return self._free_cache[key]
+
+    def _accept(
+        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, position: np.ndarray, ctx: SceneContext,
+        candidates: list[PlacedBox], checks: tuple[RequireCheck, ...], stats: RejectionStats, failure: _Failure,
+        blame: set[int],
+    ) -> bool:
+        obj.position = position
+        if rt.after_position:
+            obj.rotation = np.asarray(rt.plan.orientation.compute(ctx, obj), dtype=float)  # type: ignore[union-attr]
+        assert obj.rotation is not None
+        if candidates:
+            reach = aabb_reach(obj.rotation, half) if rt.after_position or rt.reach is None else rt.reach
+            hit = first_hit(candidates, position, obj.rotation, half, reach)
+            if hit is not None:
+                stats.add(COLLISION)
+                blame.add(hit.index)
+                failure.index, failure.kind, failure.blockers = rt.plan.index, "blocked", [hit]
+                return False
+        for check in checks:
+            if not check.test(ctx):
+                stats.add(REQUIRE)
+                failure.index, failure.kind, failure.label = rt.plan.index, "require", check.label_id
+                return False
+        return True
+
+    def _over_budget(self) -> bool:
+        return self._placements >= self.limits.placement_budget or self._draws >= self.limits.draw_budget
+
+    # ------------------------------------------------------------ joint law
+    def _joint_ok(self, ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure) -> bool:
+        """Whole-scene test: no pair collides and every rejection-checked require holds."""
+        for i, q in enumerate(placed):
+            if q.allow:
+                continue
+            others = near(placed[:i], np.array(q.center), np.array(q.center), q.reach)
+            hit = first_hit(others, q.box.center, q.box.rotation, q.box.half_extents, q.reach)
+            if hit is not None:
+                stats.add(COLLISION)
+                failure.index, failure.kind, failure.blockers = q.index, "blocked", [hit]
+                return False
+        for checks in self._checks:
+            for check in checks:
+                if (check.soft is None or check.soft in ctx.active_requires) and not check.test(ctx):
+                    stats.add(REQUIRE)
+                    failure.kind, failure.label = "require", check.label_id
+                    return False
+        return True
+
+    # ------------------------------------------------------------ errors
+    def _error(self, seed: int, index: int, stats: RejectionStats, failure: _Failure, attempts: int) -> PrscError:
+        labels = self.cprog.labels
+        head = f"could not sample scene {index} (seed {seed}) in {attempts} attempts; rejections: {stats.summary()}"
+        span: Span | None = None
+        if 0 <= failure.index < len(self.runtimes):
+            plan = self.runtimes[failure.index].plan
+            span = plan.span
+            head += f"; last dead end at {plan.name}"
+        if failure.kind == "empty" and failure.rows is not None:
+            name = self.runtimes[failure.index].plan.name
+            inner = explain_empty(labels, failure.rows, name, span, "dead end", self._declarations)
+            return PrscError(f"{head}: its region was empty ({inner.message.split(': ', 1)[-1]})", span, inner.notes)
+        if failure.kind == "blocked":
+            notes = tuple((f"blocked by {q.name}", self.runtimes[q.index].plan.span) for q in failure.blockers)
+            return PrscError(f"{head}: no free position (every position collides)", span, notes)
+        if failure.kind == "require" and failure.label >= 0:
+            lab = labels[failure.label]
+            return PrscError(f"{head}: a require never held", span, ((f"this require: {lab.text}", lab.span),))
+        return PrscError(head, span)

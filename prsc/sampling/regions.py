@@ -1,0 +1,296 @@
+"""Prepared feasible regions of one object, cached by the concrete values they depend on.
+
+Three cases, decided by the constraint stage:
+- static: every rule gives the same rows in every scene: prepared once;
+- anchored: the non-static rows move rigidly with one earlier object (e.g. `on tr_1`):
+  prepared once with that object at the origin, translated by its position per scene
+  (when the static rows, e.g. the workspace, do not cut the translated region);
+- general: rows built per scene; a point (`at`) is solved directly, anything else is
+  prepared (vertex enumeration + triangulation), with a small cache on the exact rows.
+The sample is a function of the scene's rows and random stream only, never of which
+scenes filled a cache first.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+
+from prsc.constraints.context import SceneContext
+from prsc.constraints.model import RegionRules, Support
+from prsc.geometry.affine import AffineRegion, reduce_affine
+from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.hit_and_run import hit_and_run
+from prsc.geometry.polytope import Polytope, intersect
+from prsc.geometry.sampler import UniformSampler, prepare_sampler
+
+TOL = 1e-9  # metres: feasibility tolerance of a point against its rows
+_CACHE_SIZE = 256
+
+
+class Prepared:
+    """A non-empty region ready for drawing: exact sampler, bounds, affine hull (lazily)."""
+
+    __slots__ = ("poly", "sampler", "point", "lo", "hi", "_affine")
+
+    def __init__(self, poly: Polytope, sampler: UniformSampler | None, point: np.ndarray | None = None) -> None:
+        self.poly = poly
+        self.sampler = sampler
+        self.point = point
+        if point is not None:
+            self.lo = self.hi = point
+        else:
+            assert sampler is not None
+            self.lo, self.hi = sampler.bounds()
+        self._affine: AffineRegion | None = None
+
+    @property
+    def dim(self) -> int:
+        """Intrinsic dimension (0 point ... 3 solid)."""
+        return 0 if self.point is not None else self.sampler.dim  # type: ignore[union-attr]
+
+    @property
+    def measure(self) -> float:
+        """Length, area or volume (1 for a point)."""
+        return 1.0 if self.point is not None else self.sampler.measure  # type: ignore[union-attr]
+
+    def draw(self, rng: np.random.Generator, method: str, walk_length: int) -> np.ndarray:
+        """One point: exact uniform, or the end of a hit-and-run walk from the Chebyshev centre."""
+        if self.point is not None:
+            return self.point.copy()
+        if method == "hit-and-run":
+            if self._affine is None:
+                self._affine = reduce_affine(self.poly)
+            return hit_and_run(self._affine, rng, 1, walk_length)[0]
+        return self.sampler.sample_one(rng)  # type: ignore[union-attr]
+
+
+def prepare(poly: Polytope) -> Prepared:
+    """Prepare a region; raises EmptyRegionError / UnboundedRegionError."""
+    point = _pinned(poly)
+    if point is not None:
+        return Prepared(poly, None, point)
+    return Prepared(poly, prepare_sampler(poly))
+
+
+def _pinned(poly: Polytope) -> np.ndarray | None:
+    """The point three independent equality rows fix, if they do; EmptyRegionError if it violates a row."""
+    c = poly.C
+    if c.shape[0] < 3:
+        return None
+    if c.shape[0] == 3 and c[0, 0] == 1.0 and c[1, 1] == 1.0 and c[2, 2] == 1.0 and not np.any(c - np.diag(np.diag(c))):
+        point = poly.d.copy()  # `at V`: the identity rows, solved exactly
+    else:
+        _, s, _ = np.linalg.svd(c)
+        if s[2] <= 1e-9 * max(1.0, s[0]):
+            return None
+        point, *_ = np.linalg.lstsq(c, poly.d, rcond=None)
+    if not _satisfies(poly, point):
+        raise EmptyRegionError("the point fixed by the equalities violates a row")
+    return point
+
+
+def _empty(poly: Polytope) -> EmptyRegionError:
+    """An EmptyRegionError carrying the rows (for explaining the conflict)."""
+    error = EmptyRegionError("the region is empty")
+    error.rows = poly  # type: ignore[attr-defined]
+    return error
+
+
+_IDENTITY = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+
+
+def _fixed_point(polys: list[Polytope]) -> tuple[np.ndarray, int] | None:
+    """(point, index of its block) for an `at`-like block (equality rows = the identity)."""
+    for i, poly in enumerate(polys):
+        c = poly.C
+        if c.shape == (3, 3) and c.tolist() == _IDENTITY:
+            return poly.d, i
+    return None
+
+
+def _row_norms(poly: Polytope) -> tuple[np.ndarray, np.ndarray]:
+    """max(|row|, 1) of the inequality and equality rows (the tolerance scale)."""
+    return (
+        np.maximum(np.sqrt(np.einsum("ij,ij->i", poly.A, poly.A)), 1.0),
+        np.maximum(np.sqrt(np.einsum("ij,ij->i", poly.C, poly.C)), 1.0),
+    )
+
+
+def _satisfies(
+    poly: Polytope, p: np.ndarray, norms: tuple[np.ndarray, np.ndarray] | None = None, tol: float = TOL, skip_eq: bool = False
+) -> bool:
+    """Whether p meets every row of poly to within tol metres."""
+    if not len(poly.b) and (skip_eq or not len(poly.d)):
+        return True
+    an, cn = _row_norms(poly) if norms is None else norms
+    if len(poly.b) and np.any(poly.A @ p - poly.b > tol * an):
+        return False
+    if len(poly.d) and not skip_eq and np.any(np.abs(poly.C @ p - poly.d) > tol * cn):
+        return False
+    return True
+
+
+class RegionProvider:
+    """The feasible region of one object in one scene (before collisions)."""
+
+    def __init__(self, plan: RegionRules) -> None:
+        self.plan = plan
+        self.static_rows = plan.static_rows
+        self.dynamic = plan.dynamic
+        self._static: Prepared | None = None
+        self._anchored: Prepared | None = None
+        self._anchored_state = "new"  # new | ok | none
+        self._slack: tuple[np.ndarray, np.ndarray] | None = None  # (S.A @ vertices.T, S.b - margin)
+        self._cache: OrderedDict[bytes, Prepared | None] = OrderedDict()
+        self._norms: tuple[np.ndarray, np.ndarray] | None = None
+
+    def _static_norms(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._norms is None:
+            assert self.static_rows is not None
+            self._norms = _row_norms(self.static_rows)
+        return self._norms
+
+    @property
+    def static_prepared(self) -> Prepared | None:
+        """The region prepared once for every scene (static rows only), if already prepared."""
+        return self._static
+
+    @property
+    def mode(self) -> str:
+        """static, anchored or general."""
+        if not self.dynamic:
+            return "static"
+        if self.plan.anchor is not None and self.plan.anchored_rows is not None:
+            return "anchored"
+        return "general"
+
+    def rows(self, ctx: SceneContext, support: Support) -> Polytope:
+        """All rows of this scene (static and dynamic), e.g. to explain an empty region."""
+        polys = [] if self.static_rows is None else [self.static_rows]
+        polys += [r.build(ctx, support) for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
+        if not polys:
+            return Polytope.everything()
+        return intersect(*polys)
+
+    def region(self, ctx: SceneContext, support: Support, support_static: bool) -> tuple[Prepared, np.ndarray | None]:
+        """(prepared region, translation to add to its draws or None); EmptyRegionError if empty."""
+        if not self.dynamic and support_static:
+            if self._static is None:
+                self._static = prepare(self.static_rows if self.static_rows is not None else Polytope.everything())
+            return self._static, None
+        if support_static and self.plan.anchor is not None:
+            shift = ctx.objects[self.plan.anchor].position
+            fast = self._anchored_region(shift)
+            if fast is not None:
+                return fast, shift
+            assert self.plan.anchored_rows is not None
+            polys = [self.plan.anchored_rows.translate(shift)]
+            if self.static_rows is not None:
+                polys.append(self.static_rows)
+            return self._general(intersect(*polys)), None
+        if support_static:
+            dynamic = [r.build(ctx, support) for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
+            fixed = _fixed_point(dynamic)
+            if fixed is not None:
+                # `at V` with a random V: no preparation, just check the point.
+                point, which = fixed
+                ok = all(_satisfies(poly, point, skip_eq=(i == which)) for i, poly in enumerate(dynamic))
+                if ok and self.static_rows is not None:
+                    ok = _satisfies(self.static_rows, point, self._static_norms())
+                if not ok:
+                    raise _empty(intersect(*dynamic, *([] if self.static_rows is None else [self.static_rows])))
+                return Prepared(dynamic[which], None, point), None
+            polys = dynamic if self.static_rows is None else [self.static_rows, *dynamic]
+            return self._general(intersect(*polys) if polys else Polytope.everything()), None
+        # The object's own size or rotation is random: every rule is rebuilt.
+        polys = [r.build(ctx, support) for r in self.plan.rules if r.soft is None or r.soft in ctx.active_requires]
+        return self._general(intersect(*polys) if polys else Polytope.everything()), None
+
+    def _anchored_region(self, shift: np.ndarray) -> Prepared | None:
+        """The anchored rows' region if the static rows do not cut it once translated, else None."""
+        if self._anchored_state == "new":
+            self._prepare_anchored()
+        if self._anchored_state != "ok":
+            return None
+        if self._slack is not None:
+            av, b = self._slack
+            # Every vertex of the translated region inside the static rows (with a margin):
+            # by convexity the static rows do not cut it.
+            if np.any(av + (self.static_rows.A @ shift)[:, None] > b[:, None]):  # type: ignore[union-attr]
+                return None
+        return self._anchored
+
+    def _prepare_anchored(self) -> None:
+        assert self.plan.anchored_rows is not None
+        try:
+            self._anchored = prepare(self.plan.anchored_rows)
+        except (EmptyRegionError, UnboundedRegionError):
+            self._anchored_state = "none"  # the general path decides, scene by scene
+            return
+        self._anchored_state = "ok"
+        s = self.static_rows
+        if s is not None:
+            if len(s.d):
+                self._anchored_state = "none"  # static equalities always cut a translated region
+                return
+            a = self._anchored
+            verts = a.point[None, :] if a.point is not None else a.sampler.vertices()  # type: ignore[union-attr]
+            an = np.maximum(np.linalg.norm(s.A, axis=1), 1.0)
+            self._slack = (s.A @ verts.T, s.b - TOL * an)
+
+    def _general(self, poly: Polytope) -> Prepared:
+        """Prepare per-scene rows, reusing an identical earlier preparation."""
+        key = poly.A.tobytes() + poly.b.tobytes() + b"|" + poly.C.tobytes() + poly.d.tobytes()
+        if key in self._cache:
+            hit = self._cache[key]
+            self._cache.move_to_end(key)
+            if hit is None:
+                raise _empty(poly)
+            return hit
+        try:
+            prepared: Prepared | None = prepare(poly)
+        except EmptyRegionError:
+            prepared = None
+        self._cache[key] = prepared
+        if len(self._cache) > _CACHE_SIZE:
+            self._cache.popitem(last=False)
+        if prepared is None:
+            raise _empty(poly)
+        return prepared
+
+
+def first_violation(poly: Polytope, p: np.ndarray, tol: float = TOL) -> int | None:
+    """The label of the first row of poly that p violates by more than tol metres, else None."""
+    if len(poly.b):
+        an = np.sqrt(np.einsum("ij,ij->i", poly.A, poly.A))
+        bad = np.nonzero(poly.A @ p - poly.b > tol * np.maximum(an, 1.0))[0]
+        if len(bad):
+            return int(poly.labels[bad[0]])
+    if len(poly.d):
+        cn = np.sqrt(np.einsum("ij,ij->i", poly.C, poly.C))
+        bad = np.nonzero(np.abs(poly.C @ p - poly.d) > tol * np.maximum(cn, 1.0))[0]
+        if len(bad):
+            return int(poly.eq_labels[bad[0]])
+    return None
+
+
+def violated_rule(provider: RegionProvider, ctx: SceneContext, support: Support, p: np.ndarray) -> int | None:
+    """The label of a rule of the provider's region that p violates, else None (the baseline's test)."""
+    plan = provider.plan
+    if plan.static_rows is not None:
+        label = first_violation(plan.static_rows, p)
+        if label is not None:
+            return label
+    if not provider.dynamic:
+        return None
+    if plan.anchor is not None and plan.anchored_rows is not None:
+        return first_violation(plan.anchored_rows, p - ctx.objects[plan.anchor].position)
+    for rule in provider.dynamic:
+        if rule.soft is not None and rule.soft not in ctx.active_requires:
+            continue
+        label = first_violation(rule.build(ctx, support), p)
+        if label is not None:
+            return label
+    return None

@@ -1,0 +1,140 @@
+"""Per-object state shared by the samplers: building an object's value in a scene."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from prsc.constraints.context import SceneContext
+from prsc.constraints.model import ConstraintProgram, ObjectPlan, Support
+from prsc.constraints.values import ObjectValue
+from prsc.errors import PrscError
+from prsc.sampling.collisions import PlacedBox, aabb_reach
+from prsc.sampling.regions import RegionProvider
+
+_DIMENSIONS = ("width", "length", "height")
+
+
+@dataclass(eq=False)
+class ObjectRuntime:
+    """One object's plan plus what does not change between scenes."""
+
+    plan: ObjectPlan
+    provider: RegionProvider
+    base_provider: RegionProvider | None
+    dims: tuple[float, float, float] | None
+    half: np.ndarray | None
+    rotation: np.ndarray | None  # static rotation (identity when there is no orientation rule)
+    support: Support | None  # static support function
+    reach: tuple[float, float, float] | None  # static AABB half extents (bound if rotation comes later)
+    after_position: bool
+    allow_static: bool | None  # allowCollisions when static
+    static_box: PlacedBox | None = None
+
+    @classmethod
+    def build(cls, plan: ObjectPlan) -> ObjectRuntime:
+        """Digest a plan."""
+        props = plan.static_props
+        dims = tuple(float(props[d]) for d in _DIMENSIONS) if all(d in props for d in _DIMENSIONS) else None
+        half = None if dims is None else np.array(dims) * 0.5
+        orient = plan.orientation
+        after = orient is not None and orient.after_position
+        rotation = np.eye(3) if orient is None else orient.static_value
+        support = None
+        reach = None
+        if half is not None:
+            if rotation is not None:
+                support = Support(rotation, half, "exact")
+                reach = aabb_reach(rotation, half)
+            elif after:
+                support = Support(None, half, orient.bound_mode)  # type: ignore[union-attr]
+                reach = aabb_reach(None, half, orient.bound_mode)  # type: ignore[union-attr]
+        if "allowCollisions" in props:
+            allow: bool | None = bool(props["allowCollisions"])
+        else:
+            allow = False if "allowCollisions" not in plan.property_fns else None
+        return cls(
+            plan,
+            RegionProvider(plan.region),
+            None if plan.base_region is None else RegionProvider(plan.base_region),
+            dims,
+            half,
+            rotation,
+            support,
+            reach,
+            after,
+            allow,
+        )
+
+    def new_value(self, ctx: SceneContext) -> tuple[ObjectValue, np.ndarray, Support]:
+        """A fresh value of the object (size and pre-position rotation set), registered in ctx."""
+        plan = self.plan
+        obj = ObjectValue(plan.name, plan.class_name, plan.span, None, None, self.dims, dict(plan.static_props), plan.property_fns)
+        ctx.objects[plan.name] = obj
+        half = self.half
+        if half is None:
+            dims = tuple(_dimension(obj, d, ctx) for d in _DIMENSIONS)
+            obj.dims = dims  # type: ignore[assignment]
+            half = np.array(dims) * 0.5
+        if self.rotation is not None:
+            obj.rotation = self.rotation
+        elif not self.after_position:
+            obj.rotation = np.asarray(plan.orientation.compute(ctx, obj), dtype=float)  # type: ignore[union-attr]
+        support = self.support
+        if support is None:
+            if obj.rotation is not None:
+                support = Support(obj.rotation, half, "exact")
+            else:
+                support = Support(None, half, plan.orientation.bound_mode)  # type: ignore[union-attr]
+        return obj, half, support
+
+    def allows_collisions(self, obj: ObjectValue, ctx: SceneContext) -> bool:
+        """The object's allowCollisions."""
+        if self.allow_static is not None:
+            return self.allow_static
+        return bool(obj.get("allowCollisions", ctx))
+
+    def finish(self, obj: ObjectValue, ctx: SceneContext) -> None:
+        """Evaluate every property (draws happen at this object's level) and the late rotation."""
+        for prop in self.plan.property_fns:
+            if prop not in obj.props:
+                obj.get(prop, ctx, self.plan.span)
+
+    def placed_box(self, obj: ObjectValue, half: np.ndarray, ctx: SceneContext) -> PlacedBox:
+        """The object's box for later collision checks (the same object every scene when static)."""
+        assert obj.position is not None and obj.rotation is not None
+        if self.static_box is not None:
+            return self.static_box
+        box = PlacedBox(obj.name, self.plan.index, obj.position, obj.rotation, half, self.allows_collisions(obj, ctx))
+        if (
+            self.plan.static_position is not None and self.rotation is not None
+            and self.half is not None and self.allow_static is not None
+        ):
+            self.static_box = box
+        return box
+
+
+def _dimension(obj: ObjectValue, name: str, ctx: SceneContext) -> float:
+    value = obj.get(name, ctx, obj.span)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
+        raise PrscError(f"{name} of {obj.name} must be a number >= 0, got {value!r}", obj.span)
+    return float(value)
+
+
+def build_runtimes(cprog: ConstraintProgram) -> list[ObjectRuntime]:
+    """One runtime per object, in placement order."""
+    return [ObjectRuntime.build(plan) for plan in cprog.objects]
+
+
+def draw_soft_requires(cprog: ConstraintProgram, ctx: SceneContext) -> frozenset[int]:
+    """Which soft requires this scene enforces (require[p]: each with probability p)."""
+    if not cprog.soft_requires:
+        return frozenset()
+    return frozenset(s.index for s in cprog.soft_requires if ctx.uniform() < s.probability)
+
+
+def evaluate_params(cprog: ConstraintProgram, ctx: SceneContext) -> dict[str, Any]:
+    """The scene's parameter values."""
+    return {name: fn(ctx) for name, fn in cprog.params}

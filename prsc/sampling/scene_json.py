@@ -1,0 +1,231 @@
+"""Scene JSON (`prsc-scene` version 1, docs/scene-json.md) from a sampled scene.
+
+Maps the compat properties: model_name "Panda" -> model "panda" (fixed base),
+"Camera" -> a camera object, "Tray"/"Table"/... -> lower-case model names; shape_type
+'CUBOID' -> "box", 'CYLINDER' -> "cylinder"; colours by name, grey level string or list
+-> rgba; mass by default 500 kg/m^3 times the box volume.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue
+from prsc.errors import PrscError
+from prsc.geometry.rotations import matrix_to_quat
+
+FORMAT = "prsc-scene"
+VERSION = 1
+DENSITY = 500.0  # kg/m^3 (LANGUAGE.md section 6)
+ROBOT_MODELS = frozenset({"panda"})
+# Models fixed in the world unless the spec says `static False`: robot arms are mounted,
+# cameras stay where they were sampled, tables are furniture.
+STATIC_MODELS = ROBOT_MODELS | {"camera", "table"}
+# Asset names the backends know (docs/scene-json.md); a class of that name uses it.
+KNOWN_MODELS = frozenset({"panda", "tray", "table", "cube", "cylinder", "bowl", "cup", "camera"})
+SHAPES = {"cuboid": "box", "box": "box", "cylinder": "cylinder", "sphere": "sphere", "mesh": "mesh"}
+DEFAULT_CAMERA = {"fovy": 60.0, "resolution": [640, 480]}
+DEFAULT_COLOR = (0.5, 0.5, 0.5, 1.0)
+
+# Properties that become top-level fields (or are consumed by the mapping).
+_MAPPED = frozenset(
+    {"position", "orientation", "width", "length", "height", "color", "model", "model_name", "shape",
+     "shape_type", "static", "mass", "camera", "fovy", "resolution", "allowCollisions"}
+)
+
+_NAMED_COLORS: dict[str, tuple[float, float, float]] = {
+    "red": (1.0, 0.0, 0.0),
+    "green": (0.0, 0.5, 0.0),
+    "blue": (0.0, 0.0, 1.0),
+    "white": (1.0, 1.0, 1.0),
+    "black": (0.0, 0.0, 0.0),
+    "brown": (0.55, 0.35, 0.17),
+    "purple": (0.5, 0.0, 0.5),
+    "yellow": (1.0, 1.0, 0.0),
+    "orange": (1.0, 0.65, 0.0),
+    "gray": (0.5, 0.5, 0.5),
+    "grey": (0.5, 0.5, 0.5),
+    "pink": (1.0, 0.75, 0.8),
+    "cyan": (0.0, 1.0, 1.0),
+    "magenta": (1.0, 0.0, 1.0),
+    "r": (1.0, 0.0, 0.0),
+    "g": (0.0, 0.5, 0.0),
+    "b": (0.0, 0.0, 1.0),
+    "c": (0.0, 0.75, 0.75),
+    "m": (0.75, 0.0, 0.75),
+    "y": (0.75, 0.75, 0.0),
+    "k": (0.0, 0.0, 0.0),
+    "w": (1.0, 1.0, 1.0),
+}
+
+_QUAT_CACHE: dict[bytes, list[float]] = {}
+
+
+def color_rgba(value: Any, where: str = "") -> list[float]:
+    """An rgba list in [0, 1] from a colour name, a grey-level string or [r, g, b(, a)]."""
+    if value is None:
+        return list(DEFAULT_COLOR)
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text in _NAMED_COLORS:
+            return [*_NAMED_COLORS[text], 1.0]
+        try:
+            grey = float(text)
+        except ValueError:
+            grey = None
+        if grey is not None:
+            if not 0.0 <= grey <= 1.0:
+                raise PrscError(f"grey level {value!r} of {where} is not in [0, 1]")
+            return [grey, grey, grey, 1.0]
+        try:
+            from matplotlib.colors import to_rgba  # CSS names and hex codes
+
+            return [float(c) for c in to_rgba(text)]
+        except (ImportError, ValueError) as error:
+            raise PrscError(f"unknown colour {value!r} of {where}") from error
+    if isinstance(value, (tuple, list, np.ndarray)):
+        parts = [float(v) for v in value]
+        if len(parts) not in (3, 4) or not all(0.0 <= v <= 1.0 for v in parts):
+            raise PrscError(f"a colour list of {where} needs 3 or 4 values in [0, 1], got {parts}")
+        return parts + [1.0] if len(parts) == 3 else parts
+    raise PrscError(f"cannot read {value!r} as the colour of {where}")
+
+
+def quaternion_wxyz(rotation: np.ndarray) -> list[float]:
+    """The rotation as [w, x, y, z] (w >= 0), cached for repeated rotations."""
+    key = rotation.tobytes()
+    quat = _QUAT_CACHE.get(key)
+    if quat is None:
+        quat = [float(v) for v in matrix_to_quat(rotation)]
+        if len(_QUAT_CACHE) > 4096:
+            _QUAT_CACHE.clear()
+        _QUAT_CACHE[key] = quat
+    return list(quat)
+
+
+def json_value(value: Any) -> Any:
+    """A property value as plain JSON data."""
+    if isinstance(value, bool) or value is None or isinstance(value, str):
+        return value
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (tuple, list)):
+        return [json_value(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): json_value(v) for k, v in value.items()}
+    if isinstance(value, ObjectValue):
+        return value.name
+    if isinstance(value, OrientedPoint):
+        return value.position.tolist()
+    if isinstance(value, RegionValue):
+        return value.kind
+    return str(value)
+
+
+def model_of(props: dict[str, Any], class_name: str) -> str | None:
+    """The asset name: `model`, else the compat `model_name` in lower case, else a known class name."""
+    model = props.get("model")
+    if model is None:
+        model = props.get("model_name")
+    if model is None:
+        guess = class_name.lower()
+        return guess if guess in KNOWN_MODELS else None
+    if not isinstance(model, str):
+        raise PrscError(f"model of {class_name} must be a string, got {model!r}")
+    return model.strip().lower() or None
+
+
+def shape_of(props: dict[str, Any]) -> str:
+    """box | cylinder | sphere | mesh from `shape` or the compat `shape_type`."""
+    shape = props.get("shape", "box")
+    # `shape` defaults to "box" on every object; the compat shape_type only speaks when
+    # shape was left at that default.
+    if str(shape).strip().lower() == "box" and props.get("shape_type") is not None:
+        shape = props["shape_type"]
+    text = str(shape).strip().lower()
+    if text not in SHAPES:
+        raise PrscError(f"unknown shape {shape!r} (box, cylinder, sphere or mesh)")
+    return SHAPES[text]
+
+
+def object_json(obj: ObjectValue) -> dict[str, Any]:
+    """One object of the scene JSON."""
+    props = obj.props
+    assert obj.position is not None and obj.rotation is not None and obj.dims is not None
+    model = model_of(props, obj.class_name)
+    is_camera = bool(props.get("camera", False)) or model == "camera"
+    static = props.get("static")
+    if static is None:
+        static = is_camera or model in STATIC_MODELS
+    w, l, h = obj.dims
+    mass = props.get("mass")
+    mass = DENSITY * w * l * h if mass is None else float(mass)
+    camera = None
+    if is_camera:
+        resolution = props.get("resolution", DEFAULT_CAMERA["resolution"])
+        camera = {"fovy": float(props.get("fovy", DEFAULT_CAMERA["fovy"])), "resolution": [int(v) for v in resolution]}
+    extra = {k: json_value(v) for k, v in props.items() if k not in _MAPPED}
+    if props.get("allowCollisions"):
+        extra["allowCollisions"] = True
+    return {
+        "name": obj.name,
+        "class": obj.class_name,
+        "position": obj.position.tolist(),
+        "quaternion": quaternion_wxyz(obj.rotation),
+        "dimensions": [float(w), float(l), float(h)],
+        "static": bool(static),
+        "mass": mass,
+        "color": color_rgba(props.get("color"), obj.name),
+        "shape": shape_of(props),
+        "model": model,
+        "camera": camera,
+        "properties": extra,
+    }
+
+
+def scene_json(
+    spec: str, seed: int, index: int, params: dict[str, Any], objects: list[ObjectValue],
+    templates: list[dict[str, Any] | None] | None = None,
+) -> dict[str, Any]:
+    """The whole scene as a JSON-ready dict (templates: per-object output of `object_template`)."""
+    out_params = {"ground": True}
+    out_params.update({k: json_value(v) for k, v in params.items()})
+    if templates is None:
+        out_objects = [object_json(o) for o in objects]
+    else:
+        out_objects = [object_json(o) if t is None else _from_template(t, o) for o, t in zip(objects, templates)]
+    return {
+        "format": FORMAT,
+        "version": VERSION,
+        "spec": spec,
+        "seed": seed,
+        "index": index,
+        "params": out_params,
+        "objects": out_objects,
+    }
+
+
+def object_template(name: str, class_name: str, props: dict[str, Any]) -> dict[str, Any]:
+    """Everything but the pose of an object whose properties are the same in every scene."""
+    dims = tuple(float(props[d]) for d in ("width", "length", "height"))
+    stand_in = ObjectValue(name, class_name, None, np.zeros(3), np.eye(3), dims, dict(props))  # type: ignore[arg-type]
+    return object_json(stand_in)
+
+
+def _from_template(template: dict[str, Any], obj: ObjectValue) -> dict[str, Any]:
+    out = dict(template)
+    out["position"] = obj.position.tolist()  # type: ignore[union-attr]
+    out["quaternion"] = quaternion_wxyz(obj.rotation)  # type: ignore[arg-type]
+    # Fresh containers per scene: a caller may edit one scene without touching the next.
+    out["dimensions"] = list(template["dimensions"])
+    out["color"] = list(template["color"])
+    out["properties"] = dict(template["properties"])
+    if template["camera"] is not None:
+        out["camera"] = {"fovy": template["camera"]["fovy"], "resolution": list(template["camera"]["resolution"])}
+    return out

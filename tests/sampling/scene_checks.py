@@ -1,0 +1,531 @@
+"""An independent checker of sampled scenes: re-derives every relation of LANGUAGE.md
+sections 4-5 from the scene JSON alone plus the spec's relations as the IR states them.
+
+It shares no code with the sampler: no prsc.constraints, no prsc.geometry. Expressions
+of the spec are evaluated in interval arithmetic (a random draw is the interval of its
+possible values), so a relation with a random argument is checked for every value the
+draw could have taken (`by (0.1, 0.2)` must hold with 0.1 at least; `at V((-1, 1), ...)`
+must lie in the box). Rotations come from the JSON quaternions; the box-box test is an
+own separating-axis test over all 15 axes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from prsc.ir import model as ir
+
+TOL = 1e-9  # metres: every specifier and require holds to this
+CONTACT = 1e-6  # boxes overlapping by less than this along some axis are in contact, not colliding
+
+
+class Unknown(Exception):
+    """The value cannot be derived from the scene JSON (then the relation is not checked)."""
+
+
+# ---------------------------------------------------------------- intervals
+
+
+@dataclass(frozen=True)
+class Iv:
+    """A scalar (shape ()) or vector (shape (3,)) interval [lo, hi]."""
+
+    lo: np.ndarray
+    hi: np.ndarray
+
+    @staticmethod
+    def exact(v: Any) -> Iv:
+        a = np.asarray(v, dtype=float)
+        return Iv(a, a)
+
+    @property
+    def is_vector(self) -> bool:
+        return self.lo.shape == (3,)
+
+    def __add__(self, o: Iv) -> Iv:
+        return Iv(self.lo + o.lo, self.hi + o.hi)
+
+    def __sub__(self, o: Iv) -> Iv:
+        return Iv(self.lo - o.hi, self.hi - o.lo)
+
+    def __neg__(self) -> Iv:
+        return Iv(-self.hi, -self.lo)
+
+    def __mul__(self, o: Iv) -> Iv:
+        c = np.stack(np.broadcast_arrays(self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi))
+        return Iv(c.min(axis=0), c.max(axis=0))
+
+    def __truediv__(self, o: Iv) -> Iv:
+        if np.any((o.lo <= 0) & (o.hi >= 0)):
+            raise Unknown("division by an interval containing 0")
+        return self * Iv(1.0 / o.hi, 1.0 / o.lo)
+
+    def component(self, i: int) -> Iv:
+        return Iv(self.lo[i], self.hi[i])
+
+    def rotate(self, r: np.ndarray) -> Iv:
+        mid, rad = (self.lo + self.hi) / 2, (self.hi - self.lo) / 2
+        return Iv(r @ mid - np.abs(r) @ rad, r @ mid + np.abs(r) @ rad)
+
+    def dot(self, n: np.ndarray) -> Iv:
+        mid, rad = (self.lo + self.hi) / 2, (self.hi - self.lo) / 2
+        return Iv(np.asarray(n @ mid - np.abs(n) @ rad), np.asarray(n @ mid + np.abs(n) @ rad))
+
+
+def quat_matrix(q: list[float]) -> np.ndarray:
+    """Rotation matrix of a unit quaternion [w, x, y, z]."""
+    w, x, y, z = q
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / n, x / n, y / n, z / n
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def euler_compat(a: float, b: float, c: float) -> np.ndarray:
+    """LANGUAGE.md section 1: Vector3D(a, b, c) = Rx(c) Ry(b) Rz(a)."""
+    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    rz = np.array([[ca, -sa, 0], [sa, ca, 0], [0, 0, 1.0]])
+    ry = np.array([[cb, 0, sb], [0, 1.0, 0], [-sb, 0, cb]])
+    rx = np.array([[1.0, 0, 0], [0, cc, -sc], [0, sc, cc]])
+    return rx @ ry @ rz
+
+
+@dataclass
+class Body:
+    """An object of the scene JSON."""
+
+    name: str
+    p: np.ndarray
+    r: np.ndarray
+    dims: np.ndarray
+    data: dict
+
+    @property
+    def half(self) -> np.ndarray:
+        return self.dims / 2
+
+    def s(self, n: np.ndarray) -> float:
+        """Support (half-thickness) along n: sum h_i |n . R e_i|."""
+        return float(np.abs(n @ self.r) @ self.half)
+
+    def corners(self) -> np.ndarray:
+        signs = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], dtype=float)
+        return self.p + (signs * self.half) @ self.r.T
+
+
+@dataclass(frozen=True)
+class Point:
+    """A face point: position and the frame of its object."""
+
+    p: np.ndarray
+    r: np.ndarray
+
+
+@dataclass(frozen=True)
+class Box:
+    """A constant cuboid region (position, rotation, dims), or a planar rectangle (height 0)."""
+
+    c: np.ndarray
+    r: np.ndarray
+    dims: np.ndarray
+    planar: bool = False
+
+
+@dataclass(frozen=True)
+class HalfSpace:
+    point: np.ndarray
+    normal: np.ndarray
+    dist: float
+
+
+_FACES = {"top": (2, 1), "bottom": (2, -1), "front": (1, 1), "back": (1, -1), "right": (0, 1), "left": (0, -1)}
+_SIDES = {"left": (0, -1.0), "right": (0, 1.0), "ahead": (1, 1.0), "behind": (1, -1.0), "above": (2, 1.0), "below": (2, -1.0)}
+
+
+class Evaluator:
+    """Interval evaluation of IR expressions against one scene."""
+
+    def __init__(self, program: ir.Program, bodies: dict[str, Body]) -> None:
+        self.program = program
+        self.bodies = bodies
+        self.variables = {v.name: v for v in program.variables}
+
+    def ev(self, e: ir.Expr) -> Any:
+        if isinstance(e, ir.Const):
+            return Iv.exact(e.value) if isinstance(e.value, (int, float)) and not isinstance(e.value, bool) else e.value
+        if isinstance(e, ir.VectorExpr):
+            parts = [self.ev(c) for c in (e.x, e.y, e.z)]
+            return Iv(np.array([p.lo for p in parts], dtype=float), np.array([p.hi for p in parts], dtype=float))
+        if isinstance(e, ir.ListExpr):
+            return [self.ev(i) for i in e.items]
+        if isinstance(e, ir.ObjectRef):
+            if e.name not in self.bodies:
+                raise Unknown(f"object {e.name} not in the scene")
+            return self.bodies[e.name]
+        if isinstance(e, ir.VarRef):
+            return self.ev(self.variables[e.name].value)
+        if isinstance(e, ir.PropertyRef):
+            return self.attr(self.ev(e.target), e.prop)
+        if isinstance(e, ir.FacePoint):
+            body = self.ev(e.target)
+            off = np.zeros(3)
+            for w in e.words:
+                axis, sign = _FACES[w]
+                off[axis] = sign * body.dims[axis] / 2
+            return Point(body.p + body.r @ off, body.r)
+        if isinstance(e, ir.RelativeTo):
+            v, frame = self.vec(self.ev(e.value)), self.ev(e.frame)
+            if isinstance(frame, (Body, Point)):
+                return Iv.exact(frame.p) + v.rotate(frame.r)
+            return self.vec(frame) + v
+        if isinstance(e, ir.BinOp):
+            a, b = self.num(self.ev(e.left)), self.num(self.ev(e.right))
+            if e.op == "+":
+                return a + b
+            if e.op == "-":
+                return a - b
+            if e.op == "*":
+                return a * b
+            return a / b
+        if isinstance(e, ir.UnaryOp):
+            v = self.ev(e.operand)
+            if e.op == "not":
+                return None if v is None else (not v)
+            return -self.num(v) if e.op == "-" else self.num(v)
+        if isinstance(e, ir.Compare):
+            return self.compare(e.op, self.ev(e.left), self.ev(e.right))
+        if isinstance(e, ir.BoolOp):
+            vals = [self.ev(o) for o in e.operands]
+            if e.op == "and":
+                return False if any(v is False for v in vals) else (True if all(v is True for v in vals) else None)
+            return True if any(v is True for v in vals) else (False if all(v is False for v in vals) else None)
+        if isinstance(e, ir.Call):
+            args = [self.num(self.ev(a)) for a in e.args]
+            if all(float(a.lo) == float(a.hi) for a in args):
+                f = {"sin": math.sin, "cos": math.cos, "tan": math.tan, "sqrt": math.sqrt, "abs": abs, "min": min,
+                     "max": max, "hypot": math.hypot, "atan2": math.atan2}[e.func]
+                return Iv.exact(f(*[float(a.lo) for a in args]))
+            raise Unknown("a function of a random value")
+        if isinstance(e, ir.Distribution):
+            if e.kind == "range":
+                lo, hi = self.num(self.ev(e.args[0])), self.num(self.ev(e.args[1]))
+                return Iv(lo.lo, hi.hi)
+            if e.kind == "truncnormal":
+                lo, hi = self.num(self.ev(e.args[2])), self.num(self.ev(e.args[3]))
+                return Iv(lo.lo, hi.hi)
+            if e.kind in ("uniform", "discrete"):
+                opts = [self.ev(a) for a in e.args]
+                if all(isinstance(o, Iv) for o in opts):
+                    return Iv(np.min([o.lo for o in opts], axis=0), np.max([o.hi for o in opts], axis=0))
+            raise Unknown(f"a {e.kind} distribution")
+        if isinstance(e, ir.RegionExpr):
+            return self.region(e)
+        raise Unknown(type(e).__name__)
+
+    def num(self, v: Any) -> Iv:
+        if isinstance(v, Iv):
+            return v
+        if isinstance(v, (Point, Body)):
+            return Iv.exact(v.p)
+        raise Unknown(f"not a number or vector: {v!r}")
+
+    def vec(self, v: Any) -> Iv:
+        v = self.num(v)
+        if not v.is_vector:
+            raise Unknown("expected a vector")
+        return v
+
+    def attr(self, target: Any, prop: str) -> Any:
+        if isinstance(target, Body):
+            if prop == "position":
+                return Iv.exact(target.p)
+            if prop in ("x", "y", "z"):
+                return Iv.exact(target.p["xyz".index(prop)])
+            if prop in ("width", "length", "height"):
+                return Iv.exact(target.dims[("width", "length", "height").index(prop)])
+            raise Unknown(f"property {prop}")
+        if isinstance(target, Point):
+            if prop == "position":
+                return Iv.exact(target.p)
+            if prop in ("x", "y", "z"):
+                return Iv.exact(target.p["xyz".index(prop)])
+        if isinstance(target, Iv) and target.is_vector and prop in ("x", "y", "z"):
+            return target.component("xyz".index(prop))
+        raise Unknown(f"attribute {prop}")
+
+    def compare(self, op: str, a: Any, b: Any) -> bool | None:
+        a, b = self.num(a), self.num(b)
+        if a.is_vector or b.is_vector:
+            raise Unknown("vector comparison")
+        if op in ("<", "<="):
+            return True if a.hi <= b.lo + TOL else (False if a.lo > b.hi + TOL else None)
+        if op in (">", ">="):
+            return True if a.lo >= b.hi - TOL else (False if a.hi < b.lo - TOL else None)
+        if op == "==":
+            return True if (a.hi <= b.lo + TOL and a.lo >= b.hi - TOL) else (False if (a.lo > b.hi + TOL or a.hi < b.lo - TOL) else None)
+        return None
+
+    def const_vec(self, e: ir.Expr) -> np.ndarray:
+        v = self.vec(self.ev(e))
+        if np.any(v.lo != v.hi):
+            raise Unknown("a random region")
+        return v.lo
+
+    def const_num(self, e: ir.Expr) -> float:
+        v = self.num(self.ev(e))
+        if v.is_vector or float(v.lo) != float(v.hi):
+            raise Unknown("a random region size")
+        return float(v.lo)
+
+    def region(self, e: ir.RegionExpr) -> Any:
+        a = dict(e.args)
+        if e.kind in ("cuboid", "rectangle"):
+            o = self.const_vec(a["orientation"])
+            dims = [self.const_num(a["width"]), self.const_num(a["length"])]
+            dims.append(self.const_num(a["height"]) if e.kind == "cuboid" else 0.0)
+            return Box(self.const_vec(a["position"]), euler_compat(*o), np.array(dims), e.kind == "rectangle")
+        if e.kind == "halfspace":
+            dist = self.const_num(a["dist"]) if "dist" in a else 0.0
+            n = self.const_vec(a["normal"])
+            return HalfSpace(self.const_vec(a["point"]), n / np.linalg.norm(n), dist)
+        if e.kind == "all":
+            return "all"
+        raise Unknown(f"region {e.kind}")
+
+
+# ---------------------------------------------------------------- relations
+
+
+def _box_inside(region: Any, body: Body, completely: bool) -> float:
+    """How far (metres) the body (or its centre) sticks out of a region (<= 0: inside)."""
+    points = body.corners() if completely else body.p[None, :]
+    if region == "all":
+        return -1.0
+    if isinstance(region, Box):
+        local = (points - region.c) @ region.r
+        excess = np.abs(local) - region.dims / 2
+        if region.planar:
+            excess[:, 2] = np.abs(local[:, 2]) if not completely else 0.0
+        return float(excess.max())
+    if isinstance(region, HalfSpace):
+        depth = (points - region.point) @ region.normal
+        worst = float((-depth).max())
+        if region.dist > 0:
+            worst = max(worst, float((depth - region.dist).max()))
+        return worst
+    raise Unknown("region kind")
+
+
+def sat_penetration(a: Body, b: Body) -> float:
+    """Smallest overlap of the projections of two boxes over the 15 separating axes."""
+    axes = [a.r[:, i] for i in range(3)] + [b.r[:, i] for i in range(3)]
+    for i in range(3):
+        for j in range(3):
+            c = np.cross(a.r[:, i], b.r[:, j])
+            n = np.linalg.norm(c)
+            if n > 1e-9:
+                axes.append(c / n)
+    d = b.p - a.p
+    return min(a.s(n) + b.s(n) - abs(float(n @ d)) for n in axes)
+
+
+def _spec_text(spec: ir.Specifier) -> str:
+    return f"{type(spec).__name__} at line {spec.span.line}"
+
+
+def check_scene(program: ir.Program, scene: dict) -> list[str]:
+    """Every violated relation of one scene, as readable strings (empty when the scene is valid)."""
+    bodies = {
+        o["name"]: Body(o["name"], np.array(o["position"], dtype=float), quat_matrix(o["quaternion"]),
+                        np.array(o["dimensions"], dtype=float), o)
+        for o in scene["objects"]
+    }
+    problems: list[str] = []
+    names = [o.name for o in program.objects]
+    if sorted(names) != sorted(bodies):
+        problems.append(f"objects differ: spec {sorted(names)} vs scene {sorted(bodies)}")
+        return problems
+    ev = Evaluator(program, bodies)
+    for decl in program.objects:
+        body = bodies[decl.name]
+        for prop, idx in (("width", 0), ("length", 1), ("height", 2)):
+            expr = decl.prop(prop)
+            if expr is not None:
+                try:
+                    v = ev.num(ev.ev(expr))
+                    if not (v.lo - TOL <= body.dims[idx] <= v.hi + TOL):
+                        problems.append(f"{decl.name}: {prop} {body.dims[idx]} not in [{v.lo}, {v.hi}]")
+                except Unknown:
+                    pass
+        for spec in decl.specifiers:
+            try:
+                bad = _check_specifier(ev, body, spec)
+            except Unknown:
+                continue
+            if bad:
+                problems.append(f"{decl.name}: {_spec_text(spec)}: {bad}")
+    # Requires (hard ones).
+    for req in program.requires:
+        if req.probability < 1.0:
+            continue
+        try:
+            holds = ev.ev(req.condition)
+        except Unknown:
+            continue
+        if holds is False:
+            problems.append(f"require at line {req.span.line} is violated")
+    # Workspace containment.
+    if program.workspace is not None:
+        try:
+            ws = ev.ev(program.workspace)
+            for body in bodies.values():
+                out = _box_inside(ws, body, True)
+                if out > TOL:
+                    problems.append(f"{body.name} sticks out of the workspace by {out:.3g} m")
+        except Unknown:
+            pass
+    # Collisions.
+    allowed = {n for n, b in bodies.items() if b.data.get("properties", {}).get("allowCollisions")}
+    items = list(bodies.values())
+    for i, a in enumerate(items):
+        for b in items[:i]:
+            if a.name in allowed or b.name in allowed:
+                continue
+            ra = np.abs(a.r) @ a.half
+            rb = np.abs(b.r) @ b.half
+            if np.any(np.abs(a.p - b.p) >= ra + rb):
+                continue
+            pen = sat_penetration(a, b)
+            if pen > CONTACT:
+                problems.append(f"{a.name} and {b.name} intersect (overlap {pen:.3g} m)")
+    return problems
+
+
+def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | None:
+    """A description of how the body violates one specifier, or None."""
+    p = body.p
+    if isinstance(spec, ir.At) or (isinstance(spec, ir.With) and spec.prop == "position"):
+        v = ev.vec(ev.ev(spec.point if isinstance(spec, ir.At) else spec.value))
+        if np.any(p < v.lo - TOL) or np.any(p > v.hi + TOL):
+            return f"position {p} not at {v.lo}..{v.hi}"
+        return None
+    if isinstance(spec, ir.On):
+        target = ev.ev(spec.target)
+        if isinstance(target, Body):
+            n, u, v = target.r[:, 2], target.r[:, 0], target.r[:, 1]
+            top = target.p + n * target.dims[2] / 2
+            gap = float(n @ (p - top)) - body.s(n)
+            if abs(gap) > TOL:
+                return f"not resting on {target.name} (gap {gap:.3g})"
+            for axis, half in ((u, target.dims[0] / 2), (v, target.dims[1] / 2)):
+                limit = half - (body.s(axis) if spec.completely else 0.0)
+                if abs(float(axis @ (p - top))) > limit + TOL:
+                    return f"outside the top of {target.name} along {axis}"
+            return None
+        if isinstance(target, Box) and target.planar:
+            n = target.r[:, 2] if target.r[2, 2] >= 0 else -target.r[:, 2]
+            gap = float(n @ (p - target.c)) - body.s(n)
+            if abs(gap) > TOL:
+                return f"not resting on the surface (gap {gap:.3g})"
+            proj = p - body.s(n) * n
+            local = (proj - target.c) @ target.r
+            for i in (0, 1):
+                axis = target.r[:, i]
+                limit = target.dims[i] / 2 - (body.s(axis) if spec.completely else 0.0)
+                if abs(local[i]) > limit + TOL:
+                    return "outside the surface"
+            return None
+        point = ev.vec(target if isinstance(target, Iv) else Iv.exact(target.p))
+        want = point + Iv.exact(np.array([0.0, 0.0, body.s(np.array([0.0, 0.0, 1.0]))]))
+        if np.any(p < want.lo - TOL) or np.any(p > want.hi + TOL):
+            return f"not on the point {want.lo}"
+        return None
+    if isinstance(spec, ir.Direction):
+        target = ev.ev(spec.target)
+        axis, sign = _SIDES[spec.relation]
+        if isinstance(target, (Body, Point)):
+            n, c = sign * target.r[:, axis], target.p
+            cn = float(n @ c)
+        else:
+            n = np.zeros(3)
+            n[axis] = sign
+            cv = ev.vec(target).dot(n)
+            cn = float(cv.hi)  # the worst case of a random point
+        d = 0.0 if spec.by is None else float(ev.num(ev.ev(spec.by)).lo)
+        margin = float(n @ p) - cn - d - body.s(n)
+        if margin < -TOL:
+            return f"{spec.relation} violated by {-margin:.3g} m"
+        return None
+    if isinstance(spec, ir.AlignedWith):
+        target = ev.ev(spec.target)
+        i = "xyz".index(spec.axis.strip("'\"").lower())
+        val = Iv.exact(target.p[i]) if isinstance(target, (Body, Point)) else ev.vec(target).component(i)
+        if p[i] < float(val.lo) - TOL or p[i] > float(val.hi) + TOL:
+            return f"not aligned on {spec.axis}"
+        return None
+    if isinstance(spec, ir.In):
+        region = ev.ev(spec.region)
+        out = _box_inside(region, body, spec.completely)
+        if out > TOL:
+            return f"outside its region by {out:.3g} m"
+        return None
+    if isinstance(spec, ir.Beyond):
+        x = ev.vec(ev.num(ev.ev(spec.target)))
+        o = ev.vec(ev.num(ev.ev(spec.origin)))
+        by = ev.num(ev.ev(spec.by))
+        if np.any(x.lo != x.hi) or np.any(o.lo != o.hi) or np.any(by.lo != by.hi):
+            raise Unknown("random beyond")
+        x, o = x.lo, o.lo
+        if by.is_vector:
+            f = np.array([x[0] - o[0], x[1] - o[1], 0.0])
+            y = f / np.linalg.norm(f)
+            xa = np.cross(y, [0.0, 0.0, 1.0])
+            want = x + by.lo[0] * xa + by.lo[1] * y + by.lo[2] * np.array([0.0, 0.0, 1.0])
+        else:
+            want = x + float(by.lo) * (x - o) / np.linalg.norm(x - o)
+        if np.max(np.abs(p - want)) > TOL:
+            return f"not at {want}"
+        return None
+    if isinstance(spec, ir.Facing):
+        v = ev.num(ev.ev(spec.direction))
+        if np.any(v.lo != v.hi):
+            raise Unknown("random facing")
+        forward = body.r[:, 1]
+        if v.is_vector:
+            want = v.lo / np.linalg.norm(v.lo)
+            if np.max(np.abs(forward - want)) > 1e-9:
+                return f"faces {forward}, not {want}"
+        else:
+            yaw = float(v.lo)
+            want = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+            if np.max(np.abs(forward - want)) > 1e-9 or abs(body.r[2, 2] - 1.0) > 1e-9:
+                return f"yaw differs from {yaw}"
+        return None
+    if isinstance(spec, ir.With) and spec.prop == "orientation":
+        v = ev.num(ev.ev(spec.value))
+        if np.any(v.lo != v.hi):
+            raise Unknown("random orientation")
+        want = euler_compat(*v.lo) if v.is_vector else euler_compat(float(v.lo), 0.0, 0.0)
+        if np.max(np.abs(body.r - want)) > 1e-9:
+            return "orientation differs from its Euler angles"
+        return None
+    if isinstance(spec, ir.FacingToward):
+        target = ev.num(ev.ev(spec.target))
+        if np.any(target.lo != target.hi):
+            raise Unknown("random target")
+        d = target.lo - p
+        d[2] = 0.0
+        if np.linalg.norm(d) < 1e-12:
+            return None
+        forward = body.r[:, 1]
+        if abs(body.r[2, 2] - 1.0) > 1e-9 or np.max(np.abs(forward - d / np.linalg.norm(d))) > 1e-9:
+            return "does not face toward its target"
+        return None
+    return None

@@ -1,0 +1,80 @@
+"""`prsc sample`, `prsc explain` and `prsc bench` through the real command line entry point."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from prsc.cli import main
+from prsc.sampling import compile_sampler
+
+REPO = Path(__file__).resolve().parents[2]
+ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
+TABLE_CUBE = str(ORIGINAL / "tableCube.prs")
+NAIVE = str(ORIGINAL / "tableCubeNaive.prs")
+
+
+def test_sample_prints_one_scene_per_line(capsys):
+    assert main(["sample", TABLE_CUBE, "-n", "3", "--seed", "4"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 3
+    scenes = [json.loads(line) for line in lines]
+    assert [s["index"] for s in scenes] == [0, 1, 2] and all(s["seed"] == 4 for s in scenes)
+    assert scenes[2] == json.loads(json.dumps(compile_sampler(TABLE_CUBE).scene(4, 2)))
+
+
+def test_sample_to_a_file_and_other_samplers(tmp_path, capsys):
+    out = tmp_path / "scenes.jsonl"
+    assert main(["sample", NAIVE, "-n", "2", "--start", "5", "--sampler", "rejection", "-o", str(out), "--stats"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == "" and "require" in captured.err
+    assert [json.loads(line)["index"] for line in out.read_text().splitlines()] == [5, 6]
+    assert main(["sample", NAIVE, "-n", "1", "--sampler", "hit-and-run", "--walk-length", "20"]) == 0
+
+
+def test_sample_errors_exit_2_and_leave_no_file(tmp_path, capsys):
+    spec = tmp_path / "bad.prs"
+    spec.write_text(
+        "from tabletop import *\n"
+        "table = Table on Vector3D(0, 0, 0), with width 1.8, with length 0.8, with height 0.8\n"
+        "a = Cube completely on table, left of (top table) by 0.1\n"
+        "b = Cube completely on table, right of (top table) by 0.1\n"
+        "c = Cube completely on table, left of a, right of b\n"
+    )
+    out = tmp_path / "out.jsonl"
+    assert main(["sample", str(spec), "-n", "2", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{spec}:5:1: error: could not sample scene 0" in err and "note: conflicting: left of a" in err
+    assert not out.exists() and list(tmp_path.iterdir()) == [spec]
+
+
+def test_explain_shows_rows_sources_regions_and_order(capsys):
+    assert main(["explain", NAIVE]) == 0
+    text = capsys.readouterr().out
+    assert "evaluation order: table, r1, r2, tr_1, tr_2, c1, camera" in text
+    assert f"require (right tr_1).x + 0.2 < table.x  [require; {NAIVE}:16]" in text
+    assert "x <= -0.3182" in text
+    assert "feasible region: dimension 2, area 0.11488 m^2" in text
+    assert "moves with tr_1" in text
+    assert "feasible region: dimension 0, a single point" in text
+    assert main(["explain", TABLE_CUBE, "--stage", "ir"]) == 0
+    assert "completely on table" in capsys.readouterr().out
+
+
+def test_bench_json_reports_every_sampler(capsys):
+    assert main(["bench", TABLE_CUBE, NAIVE, "--json", "-n", "5", "--seconds", "5"]) == 0
+    report = json.loads(capsys.readouterr().out)["specs"]
+    assert set(report) == {TABLE_CUBE, NAIVE}
+    for spec, per in report.items():
+        assert set(per) == {"exact", "hit-and-run", "rejection"}
+        for name, r in per.items():
+            assert r["scenes"] == 5 and r["scenes_per_s"] > 0 and r["peak_memory_mb"] > 0
+            assert set(r["rejections_by_cause"]) >= {"collision", "relative position", "containment", "require"}
+        assert per["exact"]["rejections_per_scene"] == 0
+        assert per["rejection"]["rejections_per_scene"] > 10
+
+
+def test_bench_table(capsys):
+    assert main(["bench", TABLE_CUBE, "-n", "3", "--samplers", "exact"]) == 0
+    out = capsys.readouterr().out
+    assert "scenes/s" in out and "exact" in out
