@@ -1,0 +1,63 @@
+"""Asset registry: model name -> recipe fitting the asset to an object's box.
+
+Part assets are lists of primitives (assets.parts.Part) in the object's box frame;
+robot assets (the Panda) are articulated models that each backend mounts at the bottom
+centre of the object's box. Names are matched case- and separator-insensitively, so the
+original ProbRobScene `model_name "DiningChair"` finds `diningchair` (alias `chair`).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Callable
+
+from assets.camera_body import camera_parts
+from assets.containers import bin_parts, box_parts, tray_parts
+from assets.furniture import chair_parts, shelf_parts
+from assets.parts import Part
+from assets.solids import bottle_parts, cube_parts, cylinder_parts
+from assets.table import table_parts
+from assets.vessel import bowl_parts, bucket_parts, cup_parts, plate_parts
+
+Recipe = Callable[[tuple[float, float, float]], tuple[Part, ...]]
+
+
+PART_ASSETS: dict[str, Recipe] = {
+    "tray": tray_parts,
+    "bin": bin_parts,
+    "box": box_parts,
+    "table": table_parts,
+    "shelf": shelf_parts,
+    "cube": cube_parts,
+    "cylinder": cylinder_parts,
+    "bottle": bottle_parts,
+    "bowl": bowl_parts,
+    "cup": cup_parts,
+    "bucket": bucket_parts,
+    "plate": plate_parts,
+    "diningchair": chair_parts,
+    "chair": chair_parts,
+    "camera": camera_parts,
+}
+"""Rigid assets built from primitives, by normalised model name."""
+
+ROBOT_ASSETS: tuple[str, ...] = ("panda",)
+"""Articulated robot models the backends know how to mount."""
+
+
+def normalise_model(name: str) -> str:
+    """Lower case without separators: 'DiningChair', 'dining_chair' -> 'diningchair'."""
+    return re.sub(r"[^a-z0-9]", "", name.lower())
+
+
+def part_recipe(model: str) -> Recipe | None:
+    """The part recipe for a model name, or None when it is not a part asset."""
+    return PART_ASSETS.get(normalise_model(model))
+
+
+def is_robot(model: str | None) -> str | None:
+    """The canonical robot name when `model` names a robot asset, else None."""
+    if model is None:
+        return None
+    key = normalise_model(model)
+    return key if key in ROBOT_ASSETS else None

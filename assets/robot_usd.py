@@ -1,0 +1,225 @@
+"""A robot URDF converted to a USD articulation asset (UsdPhysics), built once and cached.
+
+The asset's default prim `/<robot>` carries ArticulationRootAPI; every link is a flat child
+Xform (no nested rigid bodies) with RigidBodyAPI and MassAPI, placed at the robot's home
+posture, with its visual meshes converted by trimesh to UsdGeom.Mesh and its collision
+meshes as convex-hull colliders (purpose "guide", not rendered). Joints live under
+`/<robot>/joints`: revolute joints with limits in degrees and prismatic joints in metres,
+each with a drive holding the home posture; `root_joint` is a fixed joint from the world
+to the root link, whose world-side frame (`physics:localPos0/localRot0`) a scene sets to
+where it mounts the robot. Mimic joints (the Panda's second finger) have no UsdPhysics
+schema and are left as independent joints.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from assets.urdf_tree import Joint, RobotTree, read_urdf
+from prsc.geometry.rotations import matrix_to_quat
+
+RECIPE_VERSION = "1"
+
+# Drive gains per unit of joint motion: angular drives in USD are per degree.
+_ANGULAR_STIFFNESS = 1000.0 * math.pi / 180  # N m / deg
+_ANGULAR_DAMPING = 100.0 * math.pi / 180  # N m s / deg
+_LINEAR_STIFFNESS = 2000.0  # N / m
+_LINEAR_DAMPING = 20.0  # N s / m
+
+
+def robot_home(robot: str) -> dict[str, float]:
+    """Joint positions of the robot's home posture, by URDF joint name."""
+    if robot == "panda":
+        from assets.panda import ARM_JOINTS, FINGER_JOINTS, GRIPPER_OPEN, HOME_QPOS
+
+        home = dict(zip(ARM_JOINTS, HOME_QPOS))
+        home.update({name: GRIPPER_OPEN for name in FINGER_JOINTS})
+        return home
+    return {}
+
+
+def _build_dir() -> Path:
+    from assets.panda import build_dir
+
+    return build_dir()
+
+
+def robot_usd_cached(robot: str, urdf_path: Path) -> Path:
+    """Path of the robot's USD asset, converting it on first use (keyed by URDF and recipe)."""
+    digest = hashlib.sha256()
+    digest.update(RECIPE_VERSION.encode())
+    digest.update(Path(urdf_path).read_bytes())
+    digest.update(repr(sorted(robot_home(robot).items())).encode())
+    target = _build_dir() / f"{robot}-usd-{digest.hexdigest()[:12]}" / f"{robot}.usdc"
+    if not target.is_file():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        handle, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.stem}.", suffix=".usdc")
+        os.close(handle)
+        try:
+            _write_robot_usd(robot, read_urdf(urdf_path), Path(tmp))
+            os.replace(tmp, target)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+    return target
+
+
+def _quatd(matrix: np.ndarray):
+    from pxr import Gf
+
+    w, x, y, z = matrix_to_quat(matrix)
+    return Gf.Quatd(float(w), Gf.Vec3d(float(x), float(y), float(z)))
+
+
+def _quatf(matrix: np.ndarray):
+    from pxr import Gf
+
+    w, x, y, z = matrix_to_quat(matrix)
+    return Gf.Quatf(float(w), Gf.Vec3f(float(x), float(y), float(z)))
+
+
+def set_pose(xformable, matrix: np.ndarray) -> None:
+    """Author translate + orient (double precision) ops from a 4x4 pose."""
+    from pxr import Gf, UsdGeom
+
+    xformable.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*(float(v) for v in matrix[:3, 3])))
+    xformable.AddOrientOp(UsdGeom.XformOp.PrecisionDouble).Set(_quatd(matrix[:3, :3]))
+
+
+def _mesh_prim(stage, path: str, filename: str, origin: np.ndarray, scale, rgba=None):
+    """A UsdGeom.Mesh converted from a mesh file with trimesh."""
+    import trimesh
+    from pxr import Gf, UsdGeom, Vt
+
+    mesh = trimesh.load(filename, force="mesh")
+    prim = UsdGeom.Mesh.Define(stage, path)
+    vertices = np.asarray(mesh.vertices, dtype=np.float32)
+    prim.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(vertices))
+    prim.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, dtype=np.int32)))
+    prim.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, dtype=np.int32).reshape(-1)))
+    prim.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+    low, high = vertices.min(axis=0), vertices.max(axis=0)
+    prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*low.tolist()), Gf.Vec3f(*high.tolist())]))
+    set_pose(prim, origin)
+    if tuple(scale) != (1.0, 1.0, 1.0):
+        prim.AddScaleOp().Set(Gf.Vec3f(*(float(s) for s in scale)))
+    if rgba is not None:
+        prim.CreateDisplayColorAttr([Gf.Vec3f(*(float(c) for c in rgba[:3]))])
+        prim.CreateDisplayOpacityAttr([float(rgba[3])])
+    return prim
+
+
+def apply_mass(prim, mass: float, com, tensor: np.ndarray) -> None:
+    """MassAPI with mass, centre of mass, principal moments and principal axes."""
+    from pxr import Gf, UsdPhysics
+
+    api = UsdPhysics.MassAPI.Apply(prim)
+    api.CreateMassAttr(float(mass))
+    api.CreateCenterOfMassAttr(Gf.Vec3f(*(float(v) for v in com)))
+    tensor = (np.asarray(tensor, dtype=float) + np.asarray(tensor, dtype=float).T) / 2
+    off = abs(tensor[0, 1]) + abs(tensor[0, 2]) + abs(tensor[1, 2])
+    if off <= 1e-12 * max(np.trace(tensor), 1e-300):
+        diagonal, axes = np.diag(tensor), np.eye(3)
+    else:
+        diagonal, axes = np.linalg.eigh(tensor)
+        if np.linalg.det(axes) < 0:
+            axes[:, 2] *= -1.0
+    api.CreateDiagonalInertiaAttr(Gf.Vec3f(*(float(max(v, 0.0)) for v in diagonal)))
+    api.CreatePrincipalAxesAttr(_quatf(axes))
+
+
+def _axis_frame(axis: np.ndarray) -> np.ndarray:
+    """A rotation taking +X to the unit joint axis (UsdPhysics joints move about X, Y or Z)."""
+    a = axis / np.linalg.norm(axis)
+    x = np.array([1.0, 0.0, 0.0])
+    c = float(a @ x)
+    v = np.cross(x, a)
+    s = float(np.linalg.norm(v))
+    if s < 1e-12:
+        return np.eye(3) if c > 0 else np.diag([-1.0, -1.0, 1.0])
+    k = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]]) / s
+    return np.eye(3) + s * k + (1 - c) * (k @ k)
+
+
+def _joint(stage, root: str, joint: Joint, home: dict[str, float]) -> None:
+    from pxr import Gf, Sdf, UsdPhysics
+
+    path = f"{root}/joints/{joint.name}"
+    frame = _axis_frame(joint.axis) if joint.type != "fixed" else np.eye(3)
+    if joint.type == "fixed":
+        usd = UsdPhysics.FixedJoint.Define(stage, path)
+    elif joint.type in ("revolute", "continuous"):
+        usd = UsdPhysics.RevoluteJoint.Define(stage, path)
+        usd.CreateAxisAttr("X")
+        if joint.type == "revolute" and joint.lower is not None and joint.upper is not None:
+            usd.CreateLowerLimitAttr(math.degrees(joint.lower))
+            usd.CreateUpperLimitAttr(math.degrees(joint.upper))
+    elif joint.type == "prismatic":
+        usd = UsdPhysics.PrismaticJoint.Define(stage, path)
+        usd.CreateAxisAttr("X")
+        if joint.lower is not None and joint.upper is not None:
+            usd.CreateLowerLimitAttr(joint.lower)
+            usd.CreateUpperLimitAttr(joint.upper)
+    else:
+        raise ValueError(f"joint {joint.name}: type {joint.type!r} has no USD equivalent")
+    usd.CreateBody0Rel().SetTargets([Sdf.Path(f"{root}/{joint.parent}")])
+    usd.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{joint.child}")])
+    usd.CreateLocalPos0Attr(Gf.Vec3f(*(float(v) for v in joint.origin[:3, 3])))
+    usd.CreateLocalRot0Attr(_quatf(joint.origin[:3, :3] @ frame))
+    usd.CreateLocalPos1Attr(Gf.Vec3f(0.0, 0.0, 0.0))
+    usd.CreateLocalRot1Attr(_quatf(frame))
+    if joint.type in ("revolute", "continuous", "prismatic"):
+        angular = joint.type != "prismatic"
+        drive = UsdPhysics.DriveAPI.Apply(usd.GetPrim(), "angular" if angular else "linear")
+        drive.CreateTypeAttr("force")
+        drive.CreateStiffnessAttr(_ANGULAR_STIFFNESS if angular else _LINEAR_STIFFNESS)
+        drive.CreateDampingAttr(_ANGULAR_DAMPING if angular else _LINEAR_DAMPING)
+        target = home.get(joint.name, 0.0)
+        drive.CreateTargetPositionAttr(math.degrees(target) if angular else target)
+        if joint.effort:
+            drive.CreateMaxForceAttr(joint.effort)
+
+
+def _write_robot_usd(robot: str, tree: RobotTree, path: Path) -> None:
+    """Convert a parsed URDF into a USD articulation file at `path`."""
+    from pxr import Sdf, Usd, UsdGeom, UsdPhysics
+
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
+    root = f"/{robot}"
+    top = UsdGeom.Xform.Define(stage, root)
+    stage.SetDefaultPrim(top.GetPrim())
+    UsdPhysics.ArticulationRootAPI.Apply(top.GetPrim())
+    home = robot_home(robot)
+    poses = tree.link_poses(home)
+    for link in tree.links:
+        xform = UsdGeom.Xform.Define(stage, f"{root}/{link.name}")
+        set_pose(xform, poses[link.name])
+        UsdPhysics.RigidBodyAPI.Apply(xform.GetPrim())
+        rot = link.inertial_origin[:3, :3]
+        apply_mass(xform.GetPrim(), link.mass, link.inertial_origin[:3, 3], rot @ link.inertia @ rot.T)
+        for k, geometry in enumerate(link.visuals):
+            if geometry.kind == "mesh":
+                _mesh_prim(stage, f"{root}/{link.name}/visual_{k}", geometry.filename, geometry.origin, geometry.scale, geometry.rgba)
+        for k, geometry in enumerate(link.collisions):
+            if geometry.kind != "mesh":
+                continue
+            mesh = _mesh_prim(stage, f"{root}/{link.name}/collision_{k}", geometry.filename, geometry.origin, geometry.scale)
+            mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
+            UsdPhysics.CollisionAPI.Apply(mesh.GetPrim())
+            UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
+    UsdGeom.Scope.Define(stage, f"{root}/joints")
+    for joint in tree.joints:
+        _joint(stage, root, joint, home)
+    fixed = UsdPhysics.FixedJoint.Define(stage, f"{root}/joints/root_joint")
+    fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{tree.root}")])
+    stage.GetRootLayer().Save()

@@ -1,0 +1,83 @@
+"""Benchmark of the backends: files written per second per format (`make bench`).
+
+    python -m backends.bench [--spec specs/table_cube.prs] [-n 1000] [--jobs 1,2]
+
+Each run is `prsc compile` end to end (sampling, rendering, atomic writes, manifest) into a
+fresh temporary folder; the asset store (Panda meshes) is warmed first so runs measure
+steady-state throughput. Prints one line per format and job count.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from backends import TARGETS
+
+
+def _cpu_seconds() -> float:
+    """CPU time (user + system) of this process and its finished children."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def _count_files(folder: Path) -> int:
+    return sum(1 for p in folder.rglob("*") if p.is_file())
+
+
+def bench(spec: str, n: int, jobs: list[int], targets: list[str]) -> list[dict]:
+    """Time `prsc compile` of `n` scenes per target and job count."""
+    from prsc.commands.compile import compile_scenes
+
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="prsc-bench-") as tmp:
+        warm = Path(tmp) / "warm"
+        # Fill the build cache (Panda conversions) and check the spec compiles.
+        root = compile_scenes(spec, list(TARGETS), 1, 0, str(warm))
+        for target in targets:
+            for j in jobs:
+                out = Path(tmp) / f"{target}-{j}"
+                # Start from a warm store so the run times scenes, not the one-off mesh copy.
+                shutil.copytree(root / "assets", out / root.name / "assets")
+                cpu_before = _cpu_seconds()
+                start = time.perf_counter()
+                compile_scenes(spec, [target], n, 0, str(out), jobs=j)
+                seconds = time.perf_counter() - start
+                cpu = _cpu_seconds() - cpu_before
+                files = _count_files(out / root.name / target)
+                rows.append({"target": target, "jobs": j, "scenes": n, "files": files, "seconds": seconds, "cpu": cpu})
+                shutil.rmtree(out)
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print a table."""
+    parser = argparse.ArgumentParser(prog="python -m backends.bench", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--spec", default="specs/table_cube.prs")
+    parser.add_argument("-n", type=int, default=1000)
+    parser.add_argument("--jobs", default="1,2", help="comma-separated job counts (default 1,2)")
+    parser.add_argument("--target", default=",".join(TARGETS), help="comma-separated targets (default all)")
+    args = parser.parse_args(argv)
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    jobs = [int(j) for j in args.jobs.split(",")]
+    targets = [t for t in args.target.split(",") if t]
+    print(f"prsc backends benchmark: {args.n} scenes of {args.spec}, {os.cpu_count()} CPUs")
+    print(f"load average {os.getloadavg()[0]:.2f} (other processes slow the wall-clock rates; the CPU-time rate is")
+    print("scenes per CPU second over all processes of the run: on an idle machine, scenes/s ~ jobs x that)")
+    print(f"{'target':<6} {'jobs':>4} {'seconds':>8} {'scenes/s':>9} {'files':>7} {'files/s':>9} {'scenes/cpu-s':>13}")
+    for row in bench(args.spec, args.n, jobs, targets):
+        print(f"{row['target']:<6} {row['jobs']:>4} {row['seconds']:>8.2f} {row['scenes'] / row['seconds']:>9.1f}"
+              f" {row['files']:>7} {row['files'] / row['seconds']:>9.1f} {row['scenes'] / row['cpu']:>13.1f}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,145 @@
+"""What every format needs per object: its parts, mass properties, robot mount and camera."""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from assets.parts import Part, box, cylinder, sphere
+from assets.registry import is_robot, part_recipe
+from backends.inertia import Inertial, composite_inertial
+from backends.scene import CameraSpec, Scene, SceneObject
+from backends.store import AssetStore
+from prsc.errors import PrscError
+
+CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
+"""Rotation (w x y z, object frame) of a camera that looks along its local -Z with +Y up
+(MuJoCo, USD) so that it looks along the object's +y with image up = the object's +z."""
+
+CAMERA_QUAT_POS_X = (0.7071067811865476, 0.0, 0.0, 0.7071067811865476)
+"""Rotation of a camera that looks along its local +X with +Z up (SDF/Gazebo)."""
+
+
+MOUNT_INERTIAL = Inertial(
+    mass=0.001, com=(0.0, 0.0, 0.0), tensor=((1e-6, 0.0, 0.0), (0.0, 1e-6, 0.0), (0.0, 0.0, 1e-6)),
+    diagonal=(1e-6, 1e-6, 1e-6), principal=(1.0, 0.0, 0.0, 0.0),
+)
+"""A robot object's own body is a near-massless mount (its links carry the mass); the
+simulators still want a positive mass on it when the robot is free-floating."""
+
+
+class UnknownModelWarning(UserWarning):
+    """An object names a model no backend knows; it is written as its plain shape."""
+
+
+_warned_classes: set[str] = set()
+
+
+@dataclass(frozen=True)
+class Body:
+    """One object resolved for the backends: its geometry, mass properties and extras."""
+
+    obj: SceneObject
+    parts: tuple[Part, ...]  # empty for a robot: the robot model is its geometry
+    inertial: Inertial  # MOUNT_INERTIAL for a robot (its links carry their own)
+    robot: str | None  # canonical robot model name, e.g. "panda"
+    camera: CameraSpec | None
+
+    @property
+    def name(self) -> str:
+        """The object's name, which names the body in every format."""
+        return self.obj.name
+
+    @property
+    def fixed(self) -> bool:
+        """Fixed in the world: a static object, or a camera (always fixed where sampled)."""
+        return self.obj.static or self.obj.camera is not None
+
+    @property
+    def mount_position(self) -> tuple[float, float, float]:
+        """Robot base in the object frame: the bottom centre of the box."""
+        return (0.0, 0.0, -self.obj.dimensions[2] / 2)
+
+
+def reset_model_warnings() -> None:
+    """Forget which classes were warned about (a new compile run warns afresh)."""
+    _warned_classes.clear()
+
+
+def _warn_unknown_model(obj: SceneObject) -> None:
+    """Warn once per class (per process) that an unknown model falls back to its shape."""
+    if obj.cls in _warned_classes:
+        return
+    _warned_classes.add(obj.cls)
+    warnings.warn(
+        UnknownModelWarning(
+            f"class {obj.cls}: unknown model {obj.model!r}; objects of this class are written as a plain {obj.shape}"
+        ),
+        stacklevel=3,
+    )
+
+
+def resolve_mesh_source(obj: SceneObject, scene: Scene) -> Path:
+    """The mesh file of a mesh-shaped object: absolute, or relative to the spec's folder or the cwd."""
+    raw = str(obj.properties["mesh"])
+    candidates = [Path(raw)] if os.path.isabs(raw) else [Path(scene.spec).parent / raw, Path(raw)]
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate.resolve()
+    tried = ", ".join(str(c) for c in candidates)
+    raise PrscError(f"object {obj.name!r}: mesh file {raw!r} not found (looked for {tried})")
+
+
+def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
+    """The object's own shape (box, cylinder, sphere or mesh) filling or inscribed in its box."""
+    w, l, h = obj.dimensions
+    if obj.shape == "box":
+        return (box("box", obj.dimensions),)
+    if obj.shape == "cylinder":
+        return (cylinder("cylinder", min(w, l) / 2, h),)
+    if obj.shape == "sphere":
+        return (sphere("sphere", min(obj.dimensions) / 2),)
+    mesh = store.normalised_mesh(resolve_mesh_source(obj, scene))
+    return (Part("mesh", "mesh", obj.dimensions, mesh=str(mesh)),)
+
+
+def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
+    """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
+    robot = is_robot(obj.model)
+    if robot is not None and obj.camera is None:
+        return Body(obj, (), MOUNT_INERTIAL, robot, None)
+    parts: tuple[Part, ...] | None = None
+    if obj.model is not None:
+        recipe = part_recipe(obj.model)
+        if recipe is not None:
+            parts = recipe(obj.dimensions)
+        else:
+            _warn_unknown_model(obj)
+    if parts is None:
+        if obj.camera is not None and obj.model is None:
+            parts = part_recipe("camera")(obj.dimensions)  # type: ignore[misc]
+        else:
+            parts = shape_parts(obj, scene, store)
+    if obj.camera is not None:
+        # A camera is a sensor: whatever its housing looks like, it never collides.
+        parts = tuple(replace(p, collides=False) for p in parts)
+    return Body(obj, parts, composite_inertial(parts, obj.mass), None, obj.camera)
+
+
+def resolve_bodies(scene: Scene, store: AssetStore) -> tuple[Body, ...]:
+    """Resolve every object of a scene, in scene order."""
+    return tuple(resolve_body(obj, scene, store) for obj in scene.objects)
+
+
+def object_matrix(obj: SceneObject) -> np.ndarray:
+    """The object's 4x4 pose in the world (box centre, orientation)."""
+    from prsc.geometry.rotations import quat_to_matrix
+
+    out = np.eye(4)
+    out[:3, :3] = quat_to_matrix(obj.quaternion)
+    out[:3, 3] = obj.position
+    return out

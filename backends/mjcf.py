@@ -1,0 +1,288 @@
+"""MJCF backend: one self-contained MuJoCo model per scene, built with mujoco.MjSpec.
+
+Layout (names the runner relies on):
+- a body per object named after it, at the scene pose (box centre); a free object has a
+  free joint of the same name; geoms are named `<object>/<part>`;
+- a Robot with model "panda": the Panda MJCF attached with prefix `<object>/` in a frame
+  `<object>/mount` at the bottom centre of the box (so `r1/base`, `r1/joint1`, `r1/tcp`,
+  actuators `r1/joint1..7`, `r1/gripper`);
+- a camera object: a camera named after the object looking along the object's +y
+  (image up = its +z) with the object's fovy and resolution;
+- a keyframe `home`: free bodies at their scene poses, robot arms at their home posture.
+
+Speed: the robot's MJCF fragment (bodies, assets, actuators, equalities, key) is built once
+per process and prefix by MjSpec.attach and spliced into each scene's XML; only the small
+scene part goes through MjSpec per scene. MjSpec writes numbers with 6 significant digits,
+so poses, sizes and masses are re-stamped with full precision (the scene's pose is exact).
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
+from backends.numbers import num, nums
+from backends.scene import Scene
+from backends.store import AssetStore, relative_path
+from backends.xmltext import element_text, placeholder, serialise
+
+TIMESTEP = 0.002
+FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling
+SOLREF = (0.01, 1.0)  # stiffer than the default 0.02 so resting objects sink < 1 mm
+CONDIM_FREE = 4  # torsional friction: a held or resting object does not spin in place
+SECTION_ORDER = (
+    "compiler", "option", "size", "visual", "statistic", "default", "asset", "worldbody",
+    "contact", "equality", "tendon", "actuator", "sensor", "keyframe",
+)
+
+
+@dataclass
+class RobotFragment:
+    """The MJCF of one attached robot as serialised text per section, ready to splice."""
+
+    sections: dict[str, str]  # section tag -> its child elements as XML text
+    base: str  # the robot's root body as XML text
+    qpos: list[str]
+    ctrl: list[str]
+
+
+def _options(spec) -> None:
+    """Simulation options shared by scenes and robot fragments (so attach does not conflict)."""
+    import mujoco
+
+    spec.compiler.degree = False
+    spec.option.timestep = TIMESTEP
+    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    spec.option.impratio = 10.0
+
+
+@lru_cache(maxsize=32)
+def _robot_fragment_xml(robot: str, prefix: str) -> tuple[str, tuple[float, ...], tuple[float, ...]]:
+    """XML of a model holding only the robot attached with `prefix`, and its home key's
+    qpos and ctrl (built once per process)."""
+    import mujoco
+
+    from assets.panda import GRIPPER_OPEN, HOME_QPOS, panda_mjcf_spec
+
+    if robot != "panda":
+        raise ValueError(f"no MJCF for robot {robot!r}")
+    holder = mujoco.MjSpec()
+    _options(holder)
+    # The home key in joint order (arm, two fingers) and actuator order (arm, gripper).
+    qpos = tuple(HOME_QPOS) + (GRIPPER_OPEN, GRIPPER_OPEN)
+    ctrl = tuple(HOME_QPOS) + (GRIPPER_OPEN,)
+    child = panda_mjcf_spec()
+    frame = holder.worldbody.add_frame()
+    frame.attach_body(child.body("base"), prefix, "")
+    return holder.to_xml(), qpos, ctrl
+
+
+def _robot_fragment(robot: str, prefix: str, store: AssetStore, folder: Path) -> RobotFragment:
+    """The robot fragment with mesh files pointing into the store, relative to `folder`."""
+    xml, home_qpos, home_ctrl = _robot_fragment_xml(robot, prefix)
+    root = ET.fromstring(xml)
+    sections: dict[str, str] = {}
+    for section in root:
+        if section.tag in ("compiler", "option", "size", "worldbody", "keyframe", "visual", "statistic"):
+            continue
+        for element in section:
+            if element.get("file"):
+                element.set("file", relative_path(store.robot_file(robot, element.get("file")), folder))
+        sections[section.tag] = "\n".join(element_text(e) for e in section)
+    base = next(root.find("worldbody").iter("body"))
+    return RobotFragment(sections, element_text(base), [num(v) for v in home_qpos], [num(v) for v in home_ctrl])
+
+
+_fragment_cache: dict[tuple[str, str, str, str], RobotFragment] = {}
+
+
+def robot_fragment(robot: str, prefix: str, store: AssetStore, folder: Path) -> RobotFragment:
+    """Cached robot fragment for one prefix and output folder."""
+    key = (robot, prefix, str(store.root), str(folder))
+    if key not in _fragment_cache:
+        _fragment_cache[key] = _robot_fragment(robot, prefix, store, folder)
+    return _fragment_cache[key]
+
+
+def _geom_type(shape: str):
+    import mujoco
+
+    return {
+        "box": mujoco.mjtGeom.mjGEOM_BOX,
+        "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+        "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
+        "mesh": mujoco.mjtGeom.mjGEOM_MESH,
+    }[shape]
+
+
+def _geom_size(part) -> tuple[float, ...]:
+    if part.shape == "box":
+        return tuple(s / 2 for s in part.size)
+    if part.shape == "cylinder":
+        return (part.radius, part.size[2] / 2, 0.0)
+    if part.shape == "sphere":
+        return (part.radius, 0.0, 0.0)
+    return (0.0, 0.0, 0.0)
+
+
+def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path):
+    """The scene without robots as an MjSpec, and the exact numbers to re-stamp."""
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    spec.modelname = f"prsc_scene_{scene.index}"
+    _options(spec)
+    width = max([640] + [b.camera.width for b in bodies if b.camera])
+    height = max([480] + [b.camera.height for b in bodies if b.camera])
+    spec.visual.global_.offwidth = width
+    spec.visual.global_.offheight = height
+    # Dim headlight plus one sun from above: colours stay readable (no saturation).
+    spec.visual.headlight.ambient = [0.3, 0.3, 0.3]
+    spec.visual.headlight.diffuse = [0.3, 0.3, 0.3]
+    spec.visual.headlight.specular = [0.0, 0.0, 0.0]
+    spec.add_texture(
+        name="prsc_grid", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        rgb1=[0.82, 0.82, 0.80], rgb2=[0.72, 0.72, 0.70], width=256, height=256,
+    )
+    material = spec.add_material(name="prsc_grid", texrepeat=[8, 8], reflectance=0.0)
+    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "prsc_grid"
+    spec.worldbody.add_light(
+        name="prsc_sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0, 0, 4], dir=[0.2, 0.3, -1],
+        diffuse=[0.6, 0.6, 0.6], specular=[0.1, 0.1, 0.1], castshadow=False,
+    )
+    if scene.ground:
+        spec.worldbody.add_geom(
+            name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="prsc_grid",
+            friction=list(FRICTION), solref=list(SOLREF),
+        )
+
+    exact: dict[tuple[str, str], dict[str, str]] = {}
+    for body in bodies:
+        obj = body.obj
+        b = spec.worldbody.add_body(name=obj.name, pos=list(obj.position), quat=list(obj.quaternion))
+        exact[("body", obj.name)] = {"pos": nums(obj.position), "quat": nums(obj.quaternion)}
+        if not body.fixed:
+            b.add_freejoint(name=obj.name)
+        # Every body gets an explicit inertial (a robot's is its near-massless mount's).
+        inertial = body.inertial
+        b.explicitinertial = True
+        b.mass = inertial.mass
+        b.ipos = list(inertial.com)
+        b.iquat = list(inertial.principal)
+        b.inertia = list(inertial.diagonal)
+        exact[("inertial", obj.name)] = {
+            "pos": nums(inertial.com), "quat": nums(inertial.principal),
+            "mass": num(inertial.mass), "diaginertia": nums(inertial.diagonal),
+        }
+        for part in body.parts:
+            gname = f"{obj.name}/{part.name}"
+            kwargs = dict(
+                name=gname, type=_geom_type(part.shape), pos=list(part.position), quat=list(part.quaternion),
+                rgba=list(obj.color), friction=list(FRICTION), solref=list(SOLREF),
+                condim=CONDIM_FREE if not body.fixed else 3,
+            )
+            if part.shape == "mesh":
+                # Absolute here (to_xml compiles and would resolve against the cwd),
+                # relative to the output file in the written XML.
+                spec.add_mesh(name=gname, file=str(part.mesh), scale=list(part.size))
+                exact[("mesh", gname)] = {"file": relative_path(part.mesh, folder), "scale": nums(part.size)}
+                kwargs["meshname"] = gname
+            else:
+                kwargs["size"] = list(_geom_size(part))
+            if not part.collides:
+                kwargs.update(contype=0, conaffinity=0)
+            b.add_geom(**kwargs)
+            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(obj.color)}
+            if part.shape != "mesh":
+                stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
+            exact[("geom", gname)] = stamp
+        if body.camera is not None:
+            b.add_camera(
+                name=obj.name, quat=list(CAMERA_QUAT_NEG_Z), fovy=body.camera.fovy,
+                resolution=[body.camera.width, body.camera.height],
+            )
+            exact[("camera", obj.name)] = {"quat": nums(CAMERA_QUAT_NEG_Z), "fovy": num(body.camera.fovy)}
+        if body.robot is not None:
+            b.add_frame(name=f"{obj.name}/mount", pos=list(body.mount_position))
+            exact[("frame", f"{obj.name}/mount")] = {"pos": nums(body.mount_position)}
+    return spec, exact
+
+
+def _stamp(root: ET.Element, exact: dict[tuple[str, str], dict[str, str]]) -> None:
+    """Overwrite MjSpec's rounded numbers (and absolute mesh paths) with exact ones."""
+    for mesh in root.iter("mesh"):
+        attrs = exact.get(("mesh", mesh.get("name", "")))
+        if attrs is not None:
+            mesh.attrib.update(attrs)
+    for body in root.iter("body"):
+        attrs = exact.get(("body", body.get("name", "")))
+        if attrs is None:
+            continue
+        body.attrib.update(attrs)
+        name = body.get("name")
+        for child in body:
+            key = (child.tag, child.get("name", name) if child.tag != "inertial" else name)
+            if key in exact:
+                child.attrib.update(exact[key])
+
+
+def _section(root: ET.Element, tag: str) -> ET.Element:
+    """The top-level section `tag`, created in canonical order when missing."""
+    found = root.find(tag)
+    if found is not None:
+        return found
+    element = ET.Element(tag)
+    rank = SECTION_ORDER.index(tag)
+    position = len(root)
+    for i, child in enumerate(root):
+        if child.tag in SECTION_ORDER and SECTION_ORDER.index(child.tag) > rank:
+            position = i
+            break
+    root.insert(position, element)
+    return element
+
+
+def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
+    """The MJCF text of a scene to be written at `path` (mesh paths are relative to it)."""
+    folder = Path(path).parent
+    bodies = resolve_bodies(scene, store)
+    spec, exact = _scene_spec(scene, bodies, store, folder)
+    root = ET.fromstring(spec.to_xml())
+    _stamp(root, exact)
+    qpos: list[str] = []
+    ctrl: list[str] = []
+    pieces: list[str] = []
+    mounts = {f.get("name"): f for f in root.iter("frame")}
+    for body in bodies:
+        obj = body.obj
+        if not body.fixed:
+            qpos += [num(v) for v in obj.position] + [num(v) for v in obj.quaternion]
+        if body.robot is None:
+            continue
+        fragment = robot_fragment(body.robot, f"{obj.name}/", store, folder)
+        placeholder(mounts[f"{obj.name}/mount"], pieces, fragment.base)
+        for tag, text in fragment.sections.items():
+            # Robot default classes become subclasses of the scene's top-level default.
+            if text:
+                placeholder(_section(root, tag), pieces, text)
+        qpos += fragment.qpos
+        ctrl += fragment.ctrl
+    if qpos or ctrl:
+        key = ET.SubElement(_section(root, "keyframe"), "key", name="home")
+        if qpos:
+            key.set("qpos", " ".join(qpos))
+        if ctrl:
+            key.set("ctrl", " ".join(ctrl))
+    size = root.find("size")
+    if size is not None:
+        root.remove(size)  # nkey etc. are derived by the compiler
+    return serialise(root, pieces) + "\n"
+
+
+def render(scene: Scene, path: Path, store: AssetStore) -> bytes:
+    """Backend entry point: the MJCF file's bytes."""
+    return mjcf_xml(scene, path, store).encode("utf-8")

@@ -1,0 +1,176 @@
+"""The scene JSON (format `prsc-scene`, version 1) as typed, validated, immutable records."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from prsc.errors import PrscError
+
+SHAPES = ("box", "cylinder", "sphere", "mesh")
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    """Intrinsics of a camera object: vertical field of view (degrees) and image size."""
+
+    fovy: float
+    width: int
+    height: int
+
+
+@dataclass(frozen=True)
+class SceneObject:
+    """One object of a scene: its box (centre pose and size) and physical properties."""
+
+    name: str
+    cls: str
+    position: tuple[float, float, float]
+    quaternion: tuple[float, float, float, float]  # w x y z, unit norm
+    dimensions: tuple[float, float, float]  # width (x), length (y), height (z)
+    static: bool
+    mass: float
+    color: tuple[float, float, float, float]
+    shape: str
+    model: str | None
+    camera: CameraSpec | None
+    properties: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A sampled scene: where it came from and its objects."""
+
+    spec: str
+    seed: int
+    index: int
+    ground: bool
+    objects: tuple[SceneObject, ...]
+    raw: Mapping[str, Any]
+
+
+def _fail(where: str, message: str) -> PrscError:
+    return PrscError(f"scene JSON: {where}: {message}")
+
+
+def _floats(value: Any, count: int, where: str) -> tuple[float, ...]:
+    """A list of `count` finite numbers."""
+    if not isinstance(value, (list, tuple)) or len(value) != count:
+        raise _fail(where, f"expected a list of {count} numbers, got {value!r}")
+    out = []
+    for item in value:
+        if isinstance(item, bool) or not isinstance(item, (int, float)) or not math.isfinite(item):
+            raise _fail(where, f"expected finite numbers, got {value!r}")
+        out.append(float(item))
+    return tuple(out)
+
+
+def _color(value: Any, where: str) -> tuple[float, float, float, float]:
+    """An rgba colour in [0, 1]; an rgb triple gets alpha 1."""
+    if isinstance(value, (list, tuple)) and len(value) == 3:
+        value = list(value) + [1.0]
+    rgba = _floats(value, 4, where)
+    if any(c < 0.0 or c > 1.0 for c in rgba):
+        raise _fail(where, f"colour components must lie in [0, 1], got {list(rgba)}")
+    return rgba  # type: ignore[return-value]
+
+
+def _camera(value: Any, where: str) -> CameraSpec | None:
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise _fail(where, f"expected null or an object with fovy and resolution, got {value!r}")
+    fovy = _floats([value.get("fovy", 60.0)], 1, f"{where}.fovy")[0]
+    if not 0.0 < fovy < 180.0:
+        raise _fail(f"{where}.fovy", f"must lie in (0, 180) degrees, got {fovy}")
+    res = value.get("resolution", [640, 480])
+    if (
+        not isinstance(res, (list, tuple))
+        or len(res) != 2
+        or not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in res)
+    ):
+        raise _fail(f"{where}.resolution", f"expected [width, height] in pixels, got {res!r}")
+    return CameraSpec(fovy=fovy, width=int(res[0]), height=int(res[1]))
+
+
+def _object(raw: Any, k: int) -> SceneObject:
+    where = f"objects[{k}]"
+    if not isinstance(raw, Mapping):
+        raise _fail(where, "expected an object")
+    name = raw.get("name")
+    if not isinstance(name, str) or not name or "/" in name or not name.isprintable():
+        raise _fail(where, f"invalid object name {name!r}")
+    where = f"object {name!r}"
+    quat = _floats(raw.get("quaternion"), 4, f"{where}.quaternion")
+    norm = math.sqrt(sum(q * q for q in quat))
+    if abs(norm - 1.0) > 1e-6:
+        raise _fail(f"{where}.quaternion", f"expected a unit quaternion (w x y z), norm is {norm}")
+    quat = tuple(q / norm for q in quat)
+    dims = _floats(raw.get("dimensions"), 3, f"{where}.dimensions")
+    if any(d <= 0.0 for d in dims):
+        raise _fail(f"{where}.dimensions", f"width, length and height must be positive, got {list(dims)}")
+    static = raw.get("static", False)
+    if not isinstance(static, bool):
+        raise _fail(f"{where}.static", f"expected true or false, got {static!r}")
+    mass = _floats([raw.get("mass")], 1, f"{where}.mass")[0]
+    if mass < 0.0:
+        raise _fail(f"{where}.mass", f"must not be negative, got {mass}")
+    shape = raw.get("shape", "box")
+    if shape not in SHAPES:
+        raise _fail(f"{where}.shape", f"expected one of {', '.join(SHAPES)}, got {shape!r}")
+    properties = raw.get("properties") or {}
+    if not isinstance(properties, Mapping):
+        raise _fail(f"{where}.properties", "expected an object")
+    if shape == "mesh" and not isinstance(properties.get("mesh"), str):
+        raise _fail(f"{where}.properties.mesh", "a mesh-shaped object needs a mesh file path")
+    model = raw.get("model")
+    if model is not None and not isinstance(model, str):
+        raise _fail(f"{where}.model", f"expected a string or null, got {model!r}")
+    camera = _camera(raw.get("camera"), f"{where}.camera")
+    if not static and camera is None and mass == 0.0:
+        raise _fail(f"{where}.mass", "a free body needs a positive mass")
+    cls = raw.get("class", "Object")
+    return SceneObject(
+        name=name,
+        cls=str(cls),
+        position=_floats(raw.get("position"), 3, f"{where}.position"),  # type: ignore[arg-type]
+        quaternion=quat,  # type: ignore[arg-type]
+        dimensions=dims,  # type: ignore[arg-type]
+        static=static,
+        mass=mass,
+        color=_color(raw.get("color", [0.7, 0.7, 0.7, 1.0]), f"{where}.color"),
+        shape=shape,
+        model=model or None,
+        camera=camera,
+        properties=properties,
+    )
+
+
+def parse_scene(raw: Mapping[str, Any]) -> Scene:
+    """Validate a scene JSON dict and return it as a typed Scene (PrscError if malformed)."""
+    if not isinstance(raw, Mapping) or raw.get("format") != "prsc-scene":
+        raise _fail("top level", "not a prsc-scene document (missing \"format\": \"prsc-scene\")")
+    if raw.get("version") != 1:
+        raise _fail("version", f"unsupported version {raw.get('version')!r} (this prsc reads version 1)")
+    objects = raw.get("objects")
+    if not isinstance(objects, list):
+        raise _fail("objects", "expected a list")
+    parsed = tuple(_object(o, k) for k, o in enumerate(objects))
+    seen: set[str] = set()
+    for obj in parsed:
+        if obj.name in seen:
+            raise _fail(f"object {obj.name!r}", "duplicate object name")
+        seen.add(obj.name)
+    params = raw.get("params") or {}
+    ground = params.get("ground", True) if isinstance(params, Mapping) else True
+    index = raw.get("index", 0)
+    seed = raw.get("seed", 0)
+    return Scene(
+        spec=str(raw.get("spec", "")),
+        seed=int(seed) if isinstance(seed, int) else 0,
+        index=int(index) if isinstance(index, int) else 0,
+        ground=bool(ground),
+        objects=parsed,
+        raw=raw,
+    )

@@ -1,0 +1,259 @@
+"""SDF backend: one world per scene with a model per object (SDFormat 1.9).
+
+Poses are written as `x y z roll pitch yaw` (pybullet's loadSDF ignores quaternion
+formats). Each model is named after its object and its first link (the one pybullet
+takes as the base) carries the object's name too and sits at the object's pose. Static
+objects are `<static>1</static>` models (pybullet reads the flag with atoi, so not
+"true"). A robot is a model whose first link, named after the object, is a massless mount
+at the box centre, welded by a fixed joint to the robot's base at the bottom centre; its
+links sit at the zero configuration and each joint axis is written in the joint (child
+link) frame, as in URDF. A fixed-base robot is a static model: pybullet cannot read a
+joint to "world" (in Gazebo a static model's joints do not move). A camera object carries a
+camera `<sensor>` looking along the object's +y.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from assets.urdf_tree import Geometry, RobotTree, read_urdf
+from backends.bodies import CAMERA_QUAT_POS_X, Body, resolve_bodies
+from backends.inertia import Inertial
+from backends.mjcf import FRICTION
+from backends.numbers import num, nums
+from backends.scene import Scene
+from backends.store import AssetStore, relative_path, robot_urdf_source
+from backends.urdf import horizontal_fov, robot_base_yaw
+from backends.xmltext import element_text, placeholder, serialise
+from prsc.errors import PrscError
+from prsc.geometry.rotations import matrix_to_rpy, quat_to_rpy, rot_z
+
+SDF_VERSION = "1.9"
+
+
+def _pose(parent: ET.Element, xyz, quat=None, rpy=None, relative_to: str | None = None) -> None:
+    if rpy is None:
+        rpy = quat_to_rpy(quat) if quat is not None else (0.0, 0.0, 0.0)
+    pose = ET.SubElement(parent, "pose")
+    if relative_to:
+        pose.set("relative_to", relative_to)
+    pose.text = nums(list(xyz) + list(rpy))
+
+
+def _matrix_pose(parent: ET.Element, matrix: np.ndarray, relative_to: str | None = None) -> None:
+    _pose(parent, matrix[:3, 3], rpy=matrix_to_rpy(matrix[:3, :3]), relative_to=relative_to)
+
+
+def _inertial(link: ET.Element, mass: float, com, tensor) -> None:
+    inertial = ET.SubElement(link, "inertial")
+    _pose(inertial, com)
+    ET.SubElement(inertial, "mass").text = num(mass)
+    inertia = ET.SubElement(inertial, "inertia")
+    for key, (i, j) in (("ixx", (0, 0)), ("ixy", (0, 1)), ("ixz", (0, 2)), ("iyy", (1, 1)), ("iyz", (1, 2)), ("izz", (2, 2))):
+        ET.SubElement(inertia, key).text = num(tensor[i][j])
+
+
+def _material(parent: ET.Element, rgba) -> None:
+    material = ET.SubElement(parent, "material")
+    ET.SubElement(material, "ambient").text = nums(rgba)
+    ET.SubElement(material, "diffuse").text = nums(rgba)
+
+
+def _surface(collision: ET.Element) -> None:
+    ode = ET.SubElement(ET.SubElement(ET.SubElement(collision, "surface"), "friction"), "ode")
+    ET.SubElement(ode, "mu").text = num(FRICTION[0])
+    ET.SubElement(ode, "mu2").text = num(FRICTION[0])
+
+
+def _part_geometry(parent: ET.Element, part, folder: Path) -> None:
+    geometry = ET.SubElement(parent, "geometry")
+    if part.shape == "box":
+        ET.SubElement(ET.SubElement(geometry, "box"), "size").text = nums(part.size)
+    elif part.shape == "cylinder":
+        cylinder = ET.SubElement(geometry, "cylinder")
+        ET.SubElement(cylinder, "radius").text = num(part.radius)
+        ET.SubElement(cylinder, "length").text = num(part.size[2])
+    elif part.shape == "sphere":
+        ET.SubElement(ET.SubElement(geometry, "sphere"), "radius").text = num(part.radius)
+    else:
+        mesh = ET.SubElement(geometry, "mesh")
+        ET.SubElement(mesh, "uri").text = relative_path(part.mesh, folder)
+        ET.SubElement(mesh, "scale").text = nums(part.size)
+
+
+def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
+    obj = body.obj
+    model = ET.SubElement(world, "model", name=obj.name)
+    # pybullet reads <static> with atoi(): only "1" makes a model fixed ("true" reads as 0).
+    ET.SubElement(model, "static").text = "1" if body.fixed else "0"
+    _pose(model, obj.position, obj.quaternion)
+    link = ET.SubElement(model, "link", name=obj.name)
+    inertial: Inertial = body.inertial
+    _inertial(link, inertial.mass, inertial.com, inertial.tensor)
+    for part in body.parts:
+        if part.collides:
+            collision = ET.SubElement(link, "collision", name=f"{part.name}_collision")
+            _pose(collision, part.position, part.quaternion)
+            _part_geometry(collision, part, folder)
+            _surface(collision)
+        visual = ET.SubElement(link, "visual", name=f"{part.name}_visual")
+        _pose(visual, part.position, part.quaternion)
+        _part_geometry(visual, part, folder)
+        _material(visual, obj.color)
+    if body.camera is not None:
+        cam = body.camera
+        sensor = ET.SubElement(link, "sensor", name=obj.name, type="camera")
+        _pose(sensor, (0.0, 0.0, 0.0), CAMERA_QUAT_POS_X)
+        camera = ET.SubElement(sensor, "camera")
+        ET.SubElement(camera, "horizontal_fov").text = num(horizontal_fov(cam.fovy, cam.width, cam.height))
+        image = ET.SubElement(camera, "image")
+        ET.SubElement(image, "width").text = str(cam.width)
+        ET.SubElement(image, "height").text = str(cam.height)
+        clip = ET.SubElement(camera, "clip")
+        ET.SubElement(clip, "near").text = "0.01"
+        ET.SubElement(clip, "far").text = "100"
+        ET.SubElement(sensor, "always_on").text = "true"
+        ET.SubElement(sensor, "update_rate").text = "30"
+
+
+@lru_cache(maxsize=8)
+def _robot_tree(robot: str) -> RobotTree:
+    return read_urdf(robot_urdf_source(robot))
+
+
+def _robot_geometry(parent: ET.Element, geometry: Geometry, robot: str, store: AssetStore, folder: Path) -> None:
+    element = ET.SubElement(parent, "geometry")
+    if geometry.kind == "mesh":
+        mesh = ET.SubElement(element, "mesh")
+        ET.SubElement(mesh, "uri").text = relative_path(store.robot_file(robot, geometry.filename), folder)
+        if geometry.scale != (1.0, 1.0, 1.0):
+            ET.SubElement(mesh, "scale").text = nums(geometry.scale)
+    elif geometry.kind == "box":
+        ET.SubElement(ET.SubElement(element, "box"), "size").text = nums(geometry.size)
+    elif geometry.kind == "cylinder":
+        cylinder = ET.SubElement(element, "cylinder")
+        ET.SubElement(cylinder, "radius").text = num(geometry.size[0])
+        ET.SubElement(cylinder, "length").text = num(geometry.size[1])
+    else:
+        ET.SubElement(ET.SubElement(element, "sphere"), "radius").text = num(geometry.size[0])
+
+
+@lru_cache(maxsize=64)
+def _robot_links_text(robot: str, store_root: str, folder: str, mount: tuple[float, float, float]) -> tuple[str, ...]:
+    """The robot's links and joints as SDF text in the model (object) frame (cached).
+
+    Links sit at the zero configuration, the base at `mount` and yawed so the arm reaches
+    along the model's +y. (pybullet ignores a base link's own pose, so the model frame
+    is the object's and the mount offset goes into every link pose.)
+    """
+    store = AssetStore(store_root)
+    tree = _robot_tree(robot)
+    holder = ET.Element("model")
+    base = np.eye(4)
+    base[:3, :3] = rot_z(robot_base_yaw(robot))
+    base[:3, 3] = mount
+    poses = tree.link_poses()
+    for link in tree.links:
+        element = ET.SubElement(holder, "link", name=link.name)
+        _matrix_pose(element, base @ poses[link.name])
+        com = link.inertial_origin
+        _inertial(element, link.mass, com[:3, 3], com[:3, :3] @ link.inertia @ com[:3, :3].T)
+        for k, geometry in enumerate(link.collisions):
+            collision = ET.SubElement(element, "collision", name=f"collision_{k}")
+            _matrix_pose(collision, geometry.origin)
+            _robot_geometry(collision, geometry, robot, store, Path(folder))
+        for k, geometry in enumerate(link.visuals):
+            visual = ET.SubElement(element, "visual", name=f"visual_{k}")
+            _matrix_pose(visual, geometry.origin)
+            _robot_geometry(visual, geometry, robot, store, Path(folder))
+            if geometry.rgba is not None:
+                _material(visual, geometry.rgba)
+    for joint in tree.joints:
+        kind = {"continuous": "revolute"}.get(joint.type, joint.type)
+        element = ET.SubElement(holder, "joint", name=joint.name, type=kind)
+        ET.SubElement(element, "parent").text = joint.parent
+        ET.SubElement(element, "child").text = joint.child
+        if kind == "fixed":
+            continue
+        # The joint frame is the child link frame, as in URDF: the axis carries over as is
+        # (SDF 1.9's default frame for it, and the one pybullet reads).
+        axis = ET.SubElement(element, "axis")
+        ET.SubElement(axis, "xyz").text = nums(joint.axis / np.linalg.norm(joint.axis))
+        limit = ET.SubElement(axis, "limit")
+        if joint.type != "continuous" and joint.lower is not None and joint.upper is not None:
+            ET.SubElement(limit, "lower").text = num(joint.lower)
+            ET.SubElement(limit, "upper").text = num(joint.upper)
+        if joint.effort is not None:
+            ET.SubElement(limit, "effort").text = num(joint.effort)
+        if joint.velocity is not None:
+            ET.SubElement(limit, "velocity").text = num(joint.velocity)
+    return ("\n".join(element_text(child) for child in holder),)
+
+
+def _robot_model(world: ET.Element, body: Body, store: AssetStore, folder: Path, pieces: list[str]) -> None:
+    """The robot as an SDF model at the object's pose; its first link, named after the
+    object, is the mount (massless, welded to the robot's base)."""
+    obj = body.obj
+    tree = _robot_tree(body.robot)
+    if obj.name in {l.name for l in tree.links}:
+        raise PrscError(f"robot object {obj.name!r} has the name of one of its {body.robot} links; rename it")
+    model = ET.SubElement(world, "model", name=obj.name)
+    _pose(model, obj.position, obj.quaternion)
+    # A fixed base is a static model: pybullet cannot parse a joint to "world".
+    ET.SubElement(model, "static").text = "1" if body.fixed else "0"
+    link = ET.SubElement(model, "link", name=obj.name)
+    _inertial(link, body.inertial.mass, body.inertial.com, body.inertial.tensor)
+    joint = ET.SubElement(model, "joint", name=f"{obj.name}_mount", type="fixed")
+    ET.SubElement(joint, "parent").text = obj.name
+    ET.SubElement(joint, "child").text = tree.root
+    for text in _robot_links_text(body.robot, str(store.root), str(folder), body.mount_position):
+        placeholder(model, pieces, text)
+
+
+def _ground_model(world: ET.Element, name: str) -> None:
+    model = ET.SubElement(world, "model", name=name)
+    ET.SubElement(model, "static").text = "1"
+    link = ET.SubElement(model, "link", name="link")
+    _inertial(link, 0.0, (0.0, 0.0, 0.0), np.zeros((3, 3)))
+    for tag in ("collision", "visual"):
+        element = ET.SubElement(link, tag, name=tag)
+        plane = ET.SubElement(ET.SubElement(element, "geometry"), "plane")
+        ET.SubElement(plane, "normal").text = "0 0 1"
+        ET.SubElement(plane, "size").text = "100 100"
+        if tag == "collision":
+            _surface(element)
+        else:
+            _material(element, (0.8, 0.8, 0.78, 1.0))
+
+
+def sdf_text(scene: Scene, path: Path, store: AssetStore) -> str:
+    """The SDF world of a scene to be written at `path` (mesh URIs relative to it)."""
+    folder = Path(path).parent
+    bodies = resolve_bodies(scene, store)
+    root = ET.Element("sdf", version=SDF_VERSION)
+    world = ET.SubElement(root, "world", name=f"scene_{scene.index}")
+    ET.SubElement(world, "gravity").text = "0 0 -9.81"
+    if scene.ground:
+        names = {b.name for b in bodies}
+        ground = "ground_plane"
+        while ground in names:
+            ground = "_" + ground
+        _ground_model(world, ground)
+    pieces: list[str] = []
+    for body in bodies:
+        if body.robot is not None:
+            _robot_model(world, body, store, folder, pieces)
+        else:
+            _parts_model(world, body, folder)
+    return '<?xml version="1.0"?>\n' + serialise(root, pieces) + "\n"
+
+
+def render(scene: Scene, path: Path, store: AssetStore) -> bytes:
+    """Backend entry point: the SDF file's bytes."""
+    return sdf_text(scene, path, store).encode("utf-8")
+
+

@@ -1,0 +1,132 @@
+"""The asset store of an output folder: meshes and robot models that scene files share.
+
+Scene files refer into the store by relative paths, so a compiled dataset folder can be
+moved or copied elsewhere and still load. Every store file is written atomically and is
+a pure function of its inputs, so concurrent workers may create the same file safely.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from functools import lru_cache
+from pathlib import Path
+
+from backends.files import atomic_copy, atomic_write
+from prsc.errors import PrscError
+
+
+def relative_path(target: Path | str, start: Path | str) -> str:
+    """`target` relative to the folder `start`, with forward slashes."""
+    return Path(os.path.relpath(Path(target), Path(start))).as_posix()
+
+
+def _sha12(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()[:12]
+
+
+@lru_cache(maxsize=8)
+def _robot_source(robot: str) -> tuple[str, str]:
+    """(URDF path, MJCF path) of a robot model, built by its asset recipe."""
+    if robot == "panda":
+        from assets.panda import panda_mjcf_path, panda_urdf_path
+
+        return str(panda_urdf_path()), str(panda_mjcf_path())
+    raise PrscError(f"no asset recipe for robot model {robot!r}")
+
+
+def robot_urdf_source(robot: str) -> Path:
+    """The robot's converted URDF (absolute mesh paths) from its asset recipe."""
+    return Path(_robot_source(robot)[0])
+
+
+@lru_cache(maxsize=64)
+def _folder_key(folder: str) -> str:
+    """`<folder name>-<hash of its files' names and contents>`: equal folders, equal keys."""
+    digest = hashlib.sha256()
+    for entry in sorted(os.scandir(folder), key=lambda e: e.name):
+        if entry.is_file():
+            digest.update(entry.name.encode() + b"\0")
+            digest.update(hashlib.sha256(Path(entry.path).read_bytes()).digest())
+    return f"{Path(folder).name}-{digest.hexdigest()[:10]}"
+
+
+class AssetStore:
+    """Shared files of one output folder: `<root>/<robot>/meshes/...`, `<root>/meshes/...`."""
+
+    def __init__(self, root: Path | str):
+        self.root = Path(root)
+
+    # ------------------------------------------------------------------ robots
+    def robot_file(self, robot: str, source: str | Path) -> Path:
+        """The store's copy of a file a robot model uses (a mesh), copied on first use.
+
+        The whole folder is copied, so an OBJ keeps its material and texture files.
+        """
+        folder = os.path.dirname(os.path.abspath(source))
+        target = self.root / robot / _folder_key(folder)
+        marker = target / ".complete"
+        if not marker.is_file():
+            target.mkdir(parents=True, exist_ok=True)
+            for entry in sorted(os.scandir(folder), key=lambda e: e.name):
+                if entry.is_file():
+                    atomic_copy(Path(entry.path), target / entry.name)
+            atomic_write(marker, "")
+        return target / os.path.basename(source)
+
+    def robot_usd(self, robot: str) -> Path:
+        """The robot as a USD articulation asset (converted once, cached in the build folder).
+
+        Its folder name carries the conversion's hash, so a changed robot never reuses a
+        stale copy."""
+        source = _robot_usd_source(robot)
+        target = self.root / robot / source.parent.name / source.name
+        if not target.is_file():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            atomic_copy(source, target)
+        return target
+
+    # ------------------------------------------------------------------ meshes
+    def normalised_mesh(self, source: Path) -> Path:
+        """An OBJ of `source` centred on its bounding box and scaled to a unit cube."""
+        stat = os.stat(source)
+        target = self.root / "meshes" / _normalised_name(str(source), stat.st_mtime_ns, stat.st_size)
+        if not target.is_file():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(target, _normalise_mesh_obj(Path(source)))
+        return target
+
+
+@lru_cache(maxsize=8)
+def _robot_usd_source(robot: str) -> Path:
+    from assets.robot_usd import robot_usd_cached
+
+    return robot_usd_cached(robot, robot_urdf_source(robot))
+
+
+@lru_cache(maxsize=256)
+def _normalised_name(source: str, mtime_ns: int, size: int) -> str:
+    """`<stem>-<hash of the file's bytes>.obj` (cached while the file is unchanged)."""
+    return f"{Path(source).stem}-{_sha12(Path(source).read_bytes())}.obj"
+
+
+def _normalise_mesh_obj(source: Path) -> bytes:
+    """OBJ text of a mesh moved to its bounding-box centre and scaled per axis to size 1."""
+    import numpy as np
+    import trimesh
+
+    try:
+        mesh = trimesh.load(str(source), force="mesh")
+    except Exception as error:  # trimesh raises many types for unreadable files
+        raise PrscError(f"cannot read mesh {source}: {error}") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise PrscError(f"mesh {source} holds no triangles")
+    low, high = mesh.bounds
+    extent = high - low
+    if np.any(extent <= 0):
+        raise PrscError(f"mesh {source} is flat (bounding box {extent.tolist()}); it cannot fill a box")
+    vertices = (mesh.vertices - (low + high) / 2) / extent
+    lines = ["# prsc: normalised to a unit cube centred at the origin", f"# source: {source.name}"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces.tolist()]
+    return ("\n".join(lines) + "\n").encode()

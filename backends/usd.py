@@ -1,0 +1,245 @@
+"""USD backend: one stage per scene (usda text), UsdPhysics throughout.
+
+Stage: Z up, metersPerUnit 1, kilogramsPerUnit 1, default prim `/World` holding a
+PhysicsScene, the ground (a plane collider) and an Xform per object named after it at the
+scene pose (translate + orient, double precision). A rigid object is a body with
+RigidBodyAPI and MassAPI (static objects are kinematic bodies, which the simulation never
+moves) whose parts are UsdGeom gprims with CollisionAPI. A camera object holds a
+UsdGeom.Camera `camera` looking along the object's +y (a USD camera looks along its -Z
+with +Y up). A Robot references the robot's articulation asset from the store under
+`<object>/mount` (the bottom centre of its box, yawed so the arm reaches along +y) and sets
+the world-side frame of the asset's `root_joint` to that mount.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
+from backends.scene import Scene
+from backends.store import AssetStore, relative_path
+from backends.urdf import robot_base_yaw
+from prsc.geometry.rotations import matrix_to_quat, rot_z
+
+GROUND_HALF_SIZE = 50.0
+CAMERA_VERTICAL_APERTURE = 20.955  # mm, USD's default; the focal length sets the fov
+
+
+def _gf_quatd(q):
+    from pxr import Gf
+
+    return Gf.Quatd(float(q[0]), Gf.Vec3d(float(q[1]), float(q[2]), float(q[3])))
+
+
+def _pose(xformable, position, quaternion) -> None:
+    from pxr import Gf, UsdGeom
+
+    xformable.AddTranslateOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*(float(v) for v in position)))
+    xformable.AddOrientOp(UsdGeom.XformOp.PrecisionDouble).Set(_gf_quatd(quaternion))
+
+
+def _color(gprim, rgba) -> None:
+    from pxr import Gf
+
+    gprim.CreateDisplayColorAttr([Gf.Vec3f(*(float(c) for c in rgba[:3]))])
+    gprim.CreateDisplayOpacityAttr([float(rgba[3])])
+
+
+def _part_prim(stage, path: str, part, folder: Path, rgba):
+    """A gprim for one part, placed and sized in its body's frame."""
+    from pxr import Gf, UsdGeom, UsdPhysics
+
+    if part.shape == "box":
+        gprim = UsdGeom.Cube.Define(stage, path)
+        gprim.CreateSizeAttr(1.0)
+        gprim.CreateExtentAttr([Gf.Vec3f(-0.5, -0.5, -0.5), Gf.Vec3f(0.5, 0.5, 0.5)])
+        scale = part.size
+    elif part.shape == "cylinder":
+        gprim = UsdGeom.Cylinder.Define(stage, path)
+        r, h = part.radius, part.size[2]
+        gprim.CreateRadiusAttr(r)
+        gprim.CreateHeightAttr(h)
+        gprim.CreateAxisAttr(UsdGeom.Tokens.z)
+        gprim.CreateExtentAttr([Gf.Vec3f(-r, -r, -h / 2), Gf.Vec3f(r, r, h / 2)])
+        scale = None
+    elif part.shape == "sphere":
+        gprim = UsdGeom.Sphere.Define(stage, path)
+        r = part.radius
+        gprim.CreateRadiusAttr(r)
+        gprim.CreateExtentAttr([Gf.Vec3f(-r, -r, -r), Gf.Vec3f(r, r, r)])
+        scale = None
+    else:
+        gprim = UsdGeom.Mesh.Define(stage, path)
+        gprim.GetPrim().GetReferences().AddReference(relative_path(_mesh_usd(part.mesh), folder))
+        scale = part.size
+    _pose(gprim, part.position, part.quaternion)
+    if scale is not None:
+        gprim.AddScaleOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*(float(s) for s in scale)))
+    _color(gprim, rgba)
+    if part.collides:
+        UsdPhysics.CollisionAPI.Apply(gprim.GetPrim())
+        if part.shape == "mesh":
+            UsdPhysics.MeshCollisionAPI.Apply(gprim.GetPrim()).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
+    return gprim
+
+
+def _mesh_usd(obj_path: str) -> Path:
+    """A USD layer beside a normalised OBJ holding it as a Mesh default prim (made once)."""
+    from backends.files import atomic_write
+
+    target = Path(obj_path).with_suffix(".usda")
+    if not target.is_file():
+        import trimesh
+        from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+
+        mesh = trimesh.load(obj_path, force="mesh")
+        layer = Sdf.Layer.CreateAnonymous(".usda")
+        stage = Usd.Stage.Open(layer)
+        UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+        UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+        prim = UsdGeom.Mesh.Define(stage, "/mesh")
+        stage.SetDefaultPrim(prim.GetPrim())
+        vertices = np.asarray(mesh.vertices, dtype=np.float32)
+        prim.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(vertices))
+        prim.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(mesh.faces), 3, dtype=np.int32)))
+        prim.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, dtype=np.int32).reshape(-1)))
+        prim.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
+        prim.CreateExtentAttr([Gf.Vec3f(*vertices.min(axis=0).tolist()), Gf.Vec3f(*vertices.max(axis=0).tolist())])
+        atomic_write(target, layer.ExportToString())
+    return target
+
+
+def _rigid_body(stage, body: Body, folder: Path) -> None:
+    from pxr import Gf, UsdGeom, UsdPhysics
+
+    obj = body.obj
+    path = f"/World/{obj.name}"
+    xform = UsdGeom.Xform.Define(stage, path)
+    _pose(xform, obj.position, obj.quaternion)
+    prim = xform.GetPrim()
+    if body.camera is None:
+        rigid = UsdPhysics.RigidBodyAPI.Apply(prim)
+        if body.fixed:
+            rigid.CreateKinematicEnabledAttr(True)
+        inertial = body.inertial
+        mass = UsdPhysics.MassAPI.Apply(prim)
+        mass.CreateMassAttr(inertial.mass)
+        mass.CreateCenterOfMassAttr(Gf.Vec3f(*inertial.com))
+        mass.CreateDiagonalInertiaAttr(Gf.Vec3f(*inertial.diagonal))
+        w, x, y, z = inertial.principal
+        mass.CreatePrincipalAxesAttr(Gf.Quatf(w, Gf.Vec3f(x, y, z)))
+    for part in body.parts:
+        _part_prim(stage, f"{path}/{part.name}", part, folder, obj.color)
+    if body.camera is not None:
+        cam = body.camera
+        camera = UsdGeom.Camera.Define(stage, f"{path}/camera")
+        _pose(camera, (0.0, 0.0, 0.0), CAMERA_QUAT_NEG_Z)
+        focal = CAMERA_VERTICAL_APERTURE / (2 * math.tan(math.radians(cam.fovy) / 2))
+        camera.CreateProjectionAttr(UsdGeom.Tokens.perspective)
+        camera.CreateFocalLengthAttr(focal)
+        camera.CreateVerticalApertureAttr(CAMERA_VERTICAL_APERTURE)
+        camera.CreateHorizontalApertureAttr(CAMERA_VERTICAL_APERTURE * cam.width / cam.height)
+        camera.CreateClippingRangeAttr(Gf.Vec2f(0.01, 100.0))
+        camera.GetPrim().CreateAttribute("prsc:resolution", _int2()).Set(Gf.Vec2i(cam.width, cam.height))
+
+
+def _int2():
+    from pxr import Sdf
+
+    return Sdf.ValueTypeNames.Int2
+
+
+def _robot_mount(stage, body: Body) -> None:
+    """The robot object's Xform at the scene pose and its mount at the box's bottom centre."""
+    from pxr import UsdGeom
+
+    obj = body.obj
+    xform = UsdGeom.Xform.Define(stage, f"/World/{obj.name}")
+    _pose(xform, obj.position, obj.quaternion)
+    yaw = robot_base_yaw(body.robot)
+    mount = UsdGeom.Xform.Define(stage, f"/World/{obj.name}/mount")
+    _pose(mount, body.mount_position, (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
+
+
+def _robot_reference(layer, body: Body, store: AssetStore, folder: Path) -> None:
+    """Reference the robot asset under the mount and weld its root joint there.
+
+    Authored with Sdf on the bare layer (no stage open), so the relative asset path is
+    not resolved against the in-memory layer.
+    """
+    from pxr import Gf, Sdf
+
+    path = f"/World/{body.name}/mount/{body.robot}"
+    spec = Sdf.CreatePrimInLayer(layer, path)
+    spec.specifier = Sdf.SpecifierDef
+    spec.referenceList.Prepend(Sdf.Reference(relative_path(store.robot_usd(body.robot), folder)))
+    # The asset's root joint holds the base to the world: its world-side frame is the mount.
+    local = np.eye(4)
+    local[:3, :3] = rot_z(robot_base_yaw(body.robot))
+    local[:3, 3] = body.mount_position
+    base = object_matrix(body.obj) @ local
+    joint = Sdf.CreatePrimInLayer(layer, f"{path}/joints/root_joint")
+    joint.specifier = Sdf.SpecifierOver
+    pos = Sdf.AttributeSpec(joint, "physics:localPos0", Sdf.ValueTypeNames.Point3f)
+    pos.default = Gf.Vec3f(*(float(v) for v in base[:3, 3]))
+    w, x, y, z = matrix_to_quat(base[:3, :3])
+    rot = Sdf.AttributeSpec(joint, "physics:localRot0", Sdf.ValueTypeNames.Quatf)
+    rot.default = Gf.Quatf(float(w), Gf.Vec3f(float(x), float(y), float(z)))
+    if not body.fixed:  # a free-floating robot (`static False`): no weld to the world
+        Sdf.AttributeSpec(joint, "physics:jointEnabled", Sdf.ValueTypeNames.Bool).default = False
+
+
+def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:
+    """The usda text of a scene's stage to be written at `path` (references relative to it)."""
+    from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics
+
+    folder = Path(path).parent
+    bodies = resolve_bodies(scene, store)
+    layer = Sdf.Layer.CreateAnonymous(".usda")
+    stage = Usd.Stage.Open(layer, Usd.Stage.LoadNone)
+    names = {b.name for b in bodies}
+
+    def free_name(name: str) -> str:
+        while name in names:
+            name = "_" + name
+        names.add(name)
+        return name
+
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    UsdPhysics.SetStageKilogramsPerUnit(stage, 1.0)
+    world = UsdGeom.Xform.Define(stage, "/World")
+    stage.SetDefaultPrim(world.GetPrim())
+    physics = UsdPhysics.Scene.Define(stage, f"/World/{free_name('PhysicsScene')}")
+    physics.CreateGravityDirectionAttr(Gf.Vec3f(0.0, 0.0, -1.0))
+    physics.CreateGravityMagnitudeAttr(9.81)
+    if scene.ground:
+        plane = UsdGeom.Plane.Define(stage, f"/World/{free_name('ground')}")
+        plane.CreateAxisAttr(UsdGeom.Tokens.z)
+        plane.CreateWidthAttr(2 * GROUND_HALF_SIZE)
+        plane.CreateLengthAttr(2 * GROUND_HALF_SIZE)
+        half = GROUND_HALF_SIZE
+        plane.CreateExtentAttr([Gf.Vec3f(-half, -half, 0.0), Gf.Vec3f(half, half, 0.0)])
+        _color(plane, (0.8, 0.8, 0.78, 1.0))
+        UsdPhysics.CollisionAPI.Apply(plane.GetPrim())
+    for body in bodies:
+        if body.robot is not None:
+            _robot_mount(stage, body)
+        else:
+            _rigid_body(stage, body, folder)
+    del stage
+    with Sdf.ChangeBlock():
+        for body in bodies:
+            if body.robot is not None:
+                _robot_reference(layer, body, store, folder)
+    return layer.ExportToString()
+
+
+def render(scene: Scene, path: Path, store: AssetStore) -> bytes:
+    """Backend entry point: the usda file's bytes."""
+    return usd_text(scene, path, store).encode("utf-8")
+
+

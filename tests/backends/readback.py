@@ -1,0 +1,214 @@
+"""Load each output format in its real simulator or library and read the scene back."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from prsc.geometry.rotations import quat_to_matrix
+
+POSE_TOL = 1e-6
+
+
+def pose_error(position, quaternion, expected: dict) -> tuple[float, float]:
+    """(position error, rotation-matrix error) against a scene object."""
+    dp = float(np.max(np.abs(np.asarray(position, float) - np.asarray(expected["position"], float))))
+    dr = float(np.max(np.abs(quat_to_matrix(quaternion) - quat_to_matrix(expected["quaternion"]))))
+    return dp, dr
+
+
+def assert_poses(poses: dict[str, tuple], scene: dict, fmt: str) -> None:
+    """Every object's pose read back equals the scene JSON's to POSE_TOL."""
+    for o in scene["objects"]:
+        assert o["name"] in poses, f"{fmt}: object {o['name']} missing"
+        dp, dr = pose_error(*poses[o["name"]], o)
+        assert dp <= POSE_TOL and dr <= POSE_TOL, f"{fmt}: {o['name']} pose off by {dp:.2e} m / {dr:.2e}"
+
+
+# ------------------------------------------------------------------ MJCF
+
+
+def mjcf_model(path: Path):
+    import mujoco
+
+    return mujoco.MjModel.from_xml_path(str(path))
+
+
+def mjcf_poses(model, scene: dict) -> dict[str, tuple]:
+    """World pose of every object body after mj_forward at the home keyframe."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    if model.nkey:
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    out = {}
+    for o in scene["objects"]:
+        body = model.body(o["name"])
+        out[o["name"]] = (data.xpos[body.id].copy(), data.xquat[body.id].copy())
+    return out
+
+
+def mjcf_settle_failures(model, steps: int = 200, moved: float = 0.005, penetration: float = 0.001) -> list[str]:
+    """Free bodies that start interpenetrating, or move other than by falling onto a support.
+
+    A body may stay put (it moved at most `moved`) or fall: drop by more than `moved`
+    while shifting sideways by no more than its bounding diameter (a block on a tray's rim
+    plane that overlaps a wall tips over the wall's inner edge onto the floor: its centre
+    ends within a radius of that edge, which is within a radius of where it started).
+    Rising, or sliding without falling, is a failure.
+    """
+    import mujoco
+
+    data = mujoco.MjData(model)
+    if model.nkey:
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    free = [j for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+    free_bodies = {int(model.jnt_bodyid[j]) for j in free}
+    failures = []
+    for c in data.contact[: data.ncon]:
+        bodies = {int(model.geom_bodyid[c.geom[0]]), int(model.geom_bodyid[c.geom[1]])}
+        roots = {int(model.body_rootid[b]) for b in bodies}
+        if c.dist < -penetration and (roots & free_bodies):
+            names = sorted(model.body(b).name for b in bodies)
+            failures.append(f"initial interpenetration {c.dist * 1000:.2f} mm between {names}")
+    start = {b: data.xpos[b].copy() for b in free_bodies}
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    for j in free:
+        b = int(model.jnt_bodyid[j])
+        d = data.xpos[b] - start[b]
+        geoms = range(model.body_geomadr[b], model.body_geomadr[b] + model.body_geomnum[b])
+        radius = max((float(np.linalg.norm(model.geom_pos[g]) + model.geom_rbound[g]) for g in geoms), default=0.0)
+        sideways = float(np.hypot(d[0], d[1]))
+        stayed = float(np.linalg.norm(d)) <= moved
+        fell = d[2] < -moved and sideways <= 2 * radius
+        if not (stayed or fell):
+            failures.append(f"{model.body(b).name} moved {np.round(d * 1000, 2).tolist()} mm")
+    return failures
+
+
+# ------------------------------------------------------------------ pybullet (URDF bundles and SDF)
+
+
+def _bullet():
+    import pybullet
+
+    return pybullet, pybullet.connect(pybullet.DIRECT)
+
+
+def _link_frame(p, body: int, client: int) -> tuple[np.ndarray, np.ndarray]:
+    """World pose (pos, wxyz) of a body's base link frame (pybullet reports the inertial frame)."""
+    pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=client)
+    local_pos, local_orn = p.getDynamicsInfo(body, -1, physicsClientId=client)[3:5]
+    inv_pos, inv_orn = p.invertTransform(local_pos, local_orn)
+    link_pos, link_orn = p.multiplyTransforms(pos, orn, inv_pos, inv_orn)
+    x, y, z, w = link_orn
+    return np.asarray(link_pos), np.asarray([w, x, y, z])
+
+
+def urdf_bundle_load(folder: Path, visuals: bool = True, steps: int = 24) -> tuple[dict[str, tuple], dict[str, float]]:
+    """Load a whole URDF bundle as its scene.json says, in pybullet DIRECT.
+
+    Returns every object's root-link pose right after loading, and its vertical motion
+    over `steps` steps under gravity with all contacts disabled (so a free object falls
+    freely and a fixed one stays put). `visuals=False` skips visual meshes (speed).
+    """
+    p, client = _bullet()
+    try:
+        p.setGravity(0, 0, -9.81, physicsClientId=client)
+        flags = 0 if visuals else p.URDF_IGNORE_VISUAL_SHAPES
+        bundle = json.loads((folder / "scene.json").read_text())
+        entries = list(bundle["objects"]) + ([dict(bundle["ground"], name=None)] if bundle["ground"] else [])
+        bodies = {}
+        for o in entries:
+            body = p.loadURDF(str(folder / o["urdf"]), o["base_position"], o["base_orientation_xyzw"],
+                              useFixedBase=o["use_fixed_base"], flags=flags, physicsClientId=client)
+            for link in range(-1, p.getNumJoints(body, physicsClientId=client)):
+                p.setCollisionFilterGroupMask(body, link, 0, 0, physicsClientId=client)
+            if o["name"] is not None:
+                bodies[o["name"]] = body
+        poses = {n: _link_frame(p, b, client) for n, b in bodies.items()}
+        for _ in range(steps):
+            p.stepSimulation(physicsClientId=client)
+        drops = {n: float(_link_frame(p, b, client)[0][2] - poses[n][0][2]) for n, b in bodies.items()}
+        return poses, drops
+    finally:
+        p.disconnect(client)
+
+
+def assert_free_fall(drops: dict[str, float], scene: dict, steps: int = 24, where: str = "") -> None:
+    """Free objects fell g t^2 / 2 (within 15%), fixed ones did not move."""
+    t = steps / 240
+    for o in scene["objects"]:
+        if o["static"] or o["camera"]:  # a camera is always fixed where it was sampled
+            assert abs(drops[o["name"]]) < 1e-9, f"{where}{o['name']} (fixed) moved"
+        else:
+            assert abs(drops[o["name"]] + 0.5 * 9.81 * t * t) < 0.15 * 0.5 * 9.81 * t * t, f"{where}{o['name']} did not fall freely"
+
+
+def urdf_validate(folder: Path) -> None:
+    """yourdfpy validates every URDF of a bundle and every mesh it names exists."""
+    import yourdfpy
+
+    for path in sorted(folder.glob("*.urdf")):
+        robot = yourdfpy.URDF.load(str(path), load_meshes=False, build_scene_graph=True)
+        assert robot.validate(), f"yourdfpy rejects {path.name}: {robot.errors}"
+        for mesh in ET.parse(path).getroot().iter("mesh"):
+            assert (folder / mesh.get("filename")).is_file(), f"{path.name}: missing mesh {mesh.get('filename')}"
+
+
+def sdf_poses(path: Path) -> dict[str, tuple]:
+    """pybullet.loadSDF the world; every model's base link pose by model name."""
+    p, client = _bullet()
+    try:
+        bodies = p.loadSDF(str(path), physicsClientId=client)
+        out = {}
+        for body in bodies:
+            name = p.getBodyInfo(body, physicsClientId=client)[1].decode()
+            out[name] = _link_frame(p, body, client)
+        return out
+    finally:
+        p.disconnect(client)
+
+
+def ign_check(path: Path) -> subprocess.CompletedProcess:
+    """`ign sdf -k` on a file."""
+    return subprocess.run(["ign", "sdf", "-k", str(path)], capture_output=True, text=True, timeout=120)
+
+
+# ------------------------------------------------------------------ USD
+
+
+def usd_errors(path: Path) -> list[str]:
+    """Every error pxr.UsdValidation's validators report on the stage."""
+    from pxr import Usd, UsdValidation
+
+    stage = Usd.Stage.Open(str(path))
+    validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
+    errors = UsdValidation.ValidationContext(validators).Validate(stage)
+    return [f"{e.GetName()}: {e.GetMessage()}" for e in errors if e.GetType() == UsdValidation.ValidationErrorType.Error]
+
+
+def usd_poses(path: Path, scene: dict) -> dict[str, tuple]:
+    """World transform of /World/<object> for every object."""
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(path))
+    cache = UsdGeom.XformCache()
+    out = {}
+    for o in scene["objects"]:
+        prim = stage.GetPrimAtPath(f"/World/{o['name']}")
+        assert prim.IsValid(), f"usd: no prim for {o['name']}"
+        m = cache.GetLocalToWorldTransform(prim)
+        # Gf matrices are row-vector: the rotation's rows are the local axes.
+        rot = np.array([[m[i][j] for j in range(3)] for i in range(3)]).T
+        from prsc.geometry.rotations import matrix_to_quat
+
+        out[o["name"]] = (np.array([m[3][0], m[3][1], m[3][2]]), matrix_to_quat(rot))
+    return out

@@ -1,0 +1,33 @@
+"""The specs every backend test compiles: the originals (../shared) and ours (specs/)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
+SCENES_PER_SPEC = 20
+
+
+def all_specs() -> list[Path]:
+    """Every .prs file of the original ProbRobScene specs and of specs/."""
+    return sorted(ORIGINAL.glob("*.prs")) + sorted((REPO / "specs").glob("*.prs"))
+
+
+def spec_id(path: Path) -> str:
+    """A readable test id: `original/tableCube` or `specs/table_cube`."""
+    return f"{'original' if path.parent.resolve() == ORIGINAL.resolve() else 'specs'}/{path.stem}"
+
+
+def compiled(tmp_root: Path, spec: Path, targets: list[str]) -> tuple[Path, list[dict]]:
+    """Compile SCENES_PER_SPEC scenes of a spec; the output folder and the scene JSONs."""
+    import json
+
+    from prsc.commands.compile import compile_scenes
+
+    out = tmp_root / spec_id(spec).replace("/", "_")
+    root = compile_scenes(str(spec), ["json"] + targets, SCENES_PER_SPEC, 0, str(out))
+    manifest = json.loads((root / "manifest.json").read_text())
+    scenes = [json.loads((root / s["files"]["json"]).read_text()) for s in manifest["scenes"]]
+    assert len(scenes) == SCENES_PER_SPEC
+    return root, scenes
