@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast as python_ast
+import warnings
 
 from lark import Token, Transformer, v_args
 
@@ -24,7 +25,10 @@ def _join(first: Span, last: Span) -> Span:
 def _decode_string(path: str, token: Token) -> str:
     """The value of a string literal (Python escapes; nothing is executed)."""
     try:
-        value = python_ast.literal_eval(str(token))
+        with warnings.catch_warnings():
+            # An unknown escape such as "\ " keeps its backslash, as in Python; no warning.
+            warnings.simplefilter("ignore")
+            value = python_ast.literal_eval(str(token))
     except (SyntaxError, ValueError) as error:
         raise PrscError(f"invalid string literal ({error.msg if isinstance(error, SyntaxError) else error})",
                         token_span(path, token)) from None
