@@ -164,7 +164,7 @@ def _robot_mount(stage, body: Body) -> None:
     _pose(mount, body.mount_position, (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
 
 
-def _robot_reference(layer, body: Body, store: AssetStore, folder: Path) -> None:
+def _robot_reference(layer, body: Body, asset: Path, folder: Path) -> None:
     """Reference the robot asset under the mount and weld its root joint there.
 
     Authored with Sdf on the bare layer (no stage open), so the relative asset path is
@@ -175,7 +175,7 @@ def _robot_reference(layer, body: Body, store: AssetStore, folder: Path) -> None
     path = f"/World/{body.name}/mount/{body.robot}"
     spec = Sdf.CreatePrimInLayer(layer, path)
     spec.specifier = Sdf.SpecifierDef
-    spec.referenceList.Prepend(Sdf.Reference(relative_path(store.robot_usd(body.robot), folder)))
+    spec.referenceList.Prepend(Sdf.Reference(relative_path(asset, folder)))
     # The asset's root joint holds the base to the world: its world-side frame is the mount.
     local = np.eye(4)
     local[:3, :3] = rot_z(robot_base_yaw(body.robot))
@@ -231,10 +231,13 @@ def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:
         else:
             _rigid_body(stage, body, folder)
     del stage
+    # Convert robot assets before the change block: building one opens a stage of its own,
+    # and no stage can define prims while a change block is open.
+    assets = {b.robot: store.robot_usd(b.robot) for b in bodies if b.robot is not None}
     with Sdf.ChangeBlock():
         for body in bodies:
             if body.robot is not None:
-                _robot_reference(layer, body, store, folder)
+                _robot_reference(layer, body, assets[body.robot], folder)
     return layer.ExportToString()
 
 
