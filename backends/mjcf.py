@@ -28,6 +28,7 @@ from backends.numbers import num, nums
 from backends.scene import Scene
 from backends.store import AssetStore, relative_path
 from backends.xmltext import element_text, placeholder, serialise
+from prsc.errors import PrscError
 
 TIMESTEP = 0.002
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling
@@ -169,6 +170,13 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
             b.add_freejoint(name=obj.name)
         # Every body gets an explicit inertial (a robot's is its near-massless mount's).
         inertial = body.inertial
+        if not body.fixed and min(inertial.mass, *inertial.diagonal) <= mujoco.mjMINVAL:
+            # MuJoCo refuses such a body when it compiles the model; say which and why.
+            raise PrscError(
+                f"scene {scene.index}: object {obj.name!r} cannot move in MuJoCo: its mass ({inertial.mass:.3g} kg) "
+                f"and principal inertia (smallest {min(inertial.diagonal):.3g} kg m^2) must exceed "
+                f"{mujoco.mjMINVAL:g}; check its size and mass, or make it static"
+            )
         b.explicitinertial = True
         b.mass = inertial.mass
         b.ipos = list(inertial.com)

@@ -163,14 +163,22 @@ def parse_scene(raw: Mapping[str, Any]) -> Scene:
             raise _fail(f"object {obj.name!r}", "duplicate object name")
         seen.add(obj.name)
     params = raw.get("params") or {}
-    ground = params.get("ground", True) if isinstance(params, Mapping) else True
-    index = raw.get("index", 0)
-    seed = raw.get("seed", 0)
+    if not isinstance(params, Mapping):
+        raise _fail("params", f"expected an object, got {params!r}")
+    ground = params.get("ground", True)
+    if not isinstance(ground, bool):
+        raise _fail("params.ground", f"expected true or false, got {ground!r}")
+    numbers = {}
+    for key in ("seed", "index"):  # both optional; they name files and episodes when present
+        value = raw.get(key, 0)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise _fail(key, f"expected a non-negative integer, got {value!r}")
+        numbers[key] = value
     return Scene(
         spec=str(raw.get("spec", "")),
-        seed=int(seed) if isinstance(seed, int) else 0,
-        index=int(index) if isinstance(index, int) else 0,
-        ground=bool(ground),
+        seed=numbers["seed"],
+        index=numbers["index"],
+        ground=ground,
         objects=parsed,
         raw=raw,
     )

@@ -4,15 +4,22 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import os
 import importlib.util
+import io
+import os
 import sys
+from typing import Any, Callable, TextIO
 
 from prsc.errors import PrscError, format_error
 
 # Each module in prsc.commands exposes `add_parser(subparsers)` and `run(args) -> int`.
 # Imported lazily so `prsc check` does not pay for mujoco, pxr or pybullet.
 COMMANDS = ("check", "explain", "sample", "compile", "run", "bench", "preview")
+DESCRIPTION = (
+    "prsc: a compiler for probabilistic 3D scene specifications (.prs). It samples scenes that "
+    "satisfy a spec's constraints exactly and writes them for simulators (MJCF, URDF, SDF, USD). "
+    "Run `prsc COMMAND --help` for a command's options."
+)
 
 
 def _available_commands() -> list[str]:
@@ -26,7 +33,7 @@ def _available_commands() -> list[str]:
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The argument parser with every available subcommand (or just `only`, to import less)."""
-    parser = argparse.ArgumentParser(prog="prsc", description=__doc__)
+    parser = argparse.ArgumentParser(prog="prsc", description=DESCRIPTION)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in _available_commands():
         if only is not None and name != only:
@@ -45,6 +52,46 @@ def _requested_command(argv: list[str]) -> str | None:
     return None
 
 
+def _discard_stdout() -> None:
+    """Point standard output at /dev/null, so what is still buffered cannot fail again at exit."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, io.UnsupportedOperation):
+        pass  # not a real file (e.g. captured by a test): nothing is flushed at exit
+
+
+class _GuardedStdout:
+    """sys.stdout whose write failures (a full disk, an I/O error) are user errors, not prsc bugs."""
+
+    def __init__(self, stream: TextIO | None) -> None:
+        # Python sets sys.stdout to None when file descriptor 1 is closed (`prsc ... >&-`).
+        self._closed = stream is None
+        self._stream = open(os.devnull, "w", encoding="utf-8") if stream is None else stream
+
+    def _guard(self, method: Callable[..., Any], *args: Any) -> Any:
+        try:
+            return method(*args)
+        except BrokenPipeError:
+            raise  # the reader went away: main() stops quietly
+        except OSError as error:
+            _discard_stdout()
+            raise PrscError(f"cannot write to standard output: {error.strerror or error}") from None
+
+    def write(self, text: str) -> int:
+        """Write text, as sys.stdout does."""
+        if self._closed and text:
+            raise PrscError("cannot write to standard output: it is closed")
+        return self._guard(self._stream.write, text)
+
+    def flush(self) -> None:
+        """Flush, as sys.stdout does."""
+        self._guard(self._stream.flush)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run a subcommand, turning user errors into exit code 2."""
     words = sys.argv[1:] if argv is None else list(argv)
@@ -52,8 +99,12 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser(_requested_command(words))
     args = parser.parse_args(words)
     module = importlib.import_module(f"prsc.commands.{args.command}")
+    stdout = sys.stdout
+    sys.stdout = _GuardedStdout(stdout)  # type: ignore[assignment]
     try:
-        return int(module.run(args) or 0)
+        code = int(module.run(args) or 0)
+        sys.stdout.flush()  # here, not at exit, so that a failure is reported like any other
+        return code
     except PrscError as error:
         sys.stderr.write(format_error(error))
         return 2
@@ -62,8 +113,7 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         # The reader went away (`prsc sample … | head`): stop quietly, as Unix tools do.
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        _discard_stdout()
         return 141
     except Exception as error:  # a bug in prsc, not in the user's input
         if os.environ.get("PRSC_DEBUG"):
@@ -73,6 +123,8 @@ def main(argv: list[str] | None = None) -> int:
             "  (this is a bug in prsc; rerun with PRSC_DEBUG=1 for the traceback)\n"
         )
         return 3
+    finally:
+        sys.stdout = stdout
 
 
 if __name__ == "__main__":

@@ -29,13 +29,26 @@ class PrscError(Exception):
         self.notes = tuple(notes)
 
 
+# Bounds on reading a source line for the caret: a line of /dev/zero or of a huge
+# minified file never ends, and the error must still be printed.
+_CHUNK_BYTES = 1024 * 1024
+_SCAN_BYTES = 64 * 1024 * 1024
+
+
 def _source_line(path: str, line: int) -> str | None:
-    """The text of one line of a file, or None when it cannot be read as text."""
+    """The text of one line of a file (its first MiB), or None when it cannot be read as text."""
     try:
         with open(path, "rb") as handle:
-            for number, raw in enumerate(handle, start=1):
+            number, scanned = 1, 0
+            while scanned <= _SCAN_BYTES:
+                raw = handle.readline(_CHUNK_BYTES)
+                if not raw:
+                    return None
                 if number == line:
                     return raw.decode("utf-8", errors="replace").rstrip("\r\n")
+                scanned += len(raw)
+                if raw.endswith(b"\n"):
+                    number += 1
     except OSError:
         return None
     return None

@@ -78,13 +78,16 @@ def _child(conn: Any, args: tuple) -> None:
     try:
         conn.send(("ok", measure(*args)))
     except PrscError as error:
-        from prsc.errors import format_error
-
-        conn.send(("error", format_error(error)))
+        # The parts, not the exception: the parent rebuilds it with its span and notes.
+        conn.send(("error", (error.message, error.span, error.notes)))
     except Exception as error:  # report, do not hang the parent
-        conn.send(("error", f"prsc: error: {type(error).__name__}: {error}\n"))
+        conn.send(("bug", f"{type(error).__name__}: {error}"))
     finally:
         conn.close()
+
+
+class BenchmarkProcessError(RuntimeError):
+    """The measuring process failed in a way that is prsc's fault (reported as an internal error)."""
 
 
 def measure_isolated(*args: Any) -> dict[str, Any]:
@@ -97,10 +100,13 @@ def measure_isolated(*args: Any) -> dict[str, Any]:
     try:
         status, payload = parent.recv()
     except EOFError:
-        status, payload = "error", "prsc: error: the benchmark process died\n"
+        status, payload = "bug", f"the benchmark process died (exit code {proc.exitcode})"
     proc.join()
+    if status == "error":
+        message, span, notes = payload
+        raise PrscError(message, span, notes)
     if status != "ok":
-        raise PrscError(payload.strip().removeprefix("prsc: error: "))
+        raise BenchmarkProcessError(payload)
     return payload
 
 
@@ -133,6 +139,12 @@ def run(args: argparse.Namespace) -> int:
     unknown = [s for s in names if s not in SAMPLERS]
     if unknown or not names:
         raise PrscError(f"unknown sampler {unknown[0] if unknown else '(none)'!r} (choose from {', '.join(SAMPLERS)})")
+    if args.scenes is not None and args.scenes < 1:
+        raise PrscError(f"-n must be >= 1, got {args.scenes}")
+    if not args.seconds > 0:  # also refuses nan, which would never stop a measurement
+        raise PrscError(f"--seconds must be > 0, got {args.seconds}")
+    if args.seed < 0:
+        raise PrscError(f"--seed must be >= 0, got {args.seed}")
     from prsc.ir import compile_program
 
     for path in args.files:

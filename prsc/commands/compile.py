@@ -13,7 +13,7 @@ also be scene JSON (a `.json` document or `.jsonl` lines, e.g. from `prsc sample
 from __future__ import annotations
 
 import argparse
-import errno
+import functools
 import hashlib
 import json
 import multiprocessing
@@ -25,7 +25,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
-from prsc.errors import PrscError
+from prsc.commands.outputs import write_error
+from prsc.errors import PrscError, Span
 
 MANIFEST = "manifest.json"
 MANIFEST_FORMAT = "prsc-manifest"
@@ -36,7 +37,7 @@ def add_parser(subparsers: Any) -> None:
     """Register `prsc compile`."""
     parser = subparsers.add_parser("compile", help="sample scenes and write simulator files", description=__doc__,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("file", help="a .prs spec, or scene JSON (.json / .jsonl)")
+    parser.add_argument("file", metavar="FILE", help="a .prs spec, or scene JSON (.json / .jsonl)")
     parser.add_argument("--target", "-t", default="json", help="comma-separated: json, mjcf, urdf, sdf, usd (default json)")
     parser.add_argument("-n", "--scenes", type=int, default=None,
                         help="number of scenes (default 1; for scene JSON input, all of them, as does 0)")
@@ -48,22 +49,57 @@ def add_parser(subparsers: Any) -> None:
 # ------------------------------------------------------------------ scene sources
 
 
-def _read_scene_file(path: Path) -> list[dict]:
-    """Scenes of a .json (one scene or a list) or .jsonl file."""
-    text = path.read_text(encoding="utf-8")
+def _read_input(path: Path) -> bytes:
+    """The bytes of an input file, or a PrscError saying why it cannot be read."""
     try:
-        if path.suffix == ".jsonl":
-            scenes = [json.loads(line) for line in text.splitlines() if line.strip()]
-        else:
-            loaded = json.loads(text)
-            scenes = loaded if isinstance(loaded, list) else [loaded]
-    except json.JSONDecodeError as error:
-        from prsc.errors import Span
+        return path.read_bytes()
+    except IsADirectoryError:
+        raise PrscError(f"{path} is a directory, not a spec or scene file") from None
+    except OSError as error:
+        raise PrscError(f"cannot read {path}: {os.strerror(error.errno) if error.errno else error}") from None
 
-        raise PrscError(f"invalid JSON: {error.msg}", Span(str(path), error.lineno, error.colno, error.lineno, error.colno + 1)) from None
-    if not all(isinstance(s, dict) for s in scenes):
-        raise PrscError(f"{path}: expected scene JSON objects")
-    return scenes
+
+def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
+    """Scenes of a .json (one scene or a list) or .jsonl file, each validated.
+
+    Validated here, before any output is written, so that an error points into the file
+    (line of a .jsonl, position in a list) rather than surfacing halfway through a run."""
+    from backends.scene import parse_scene
+    from prsc.syntax import decode_text
+
+    text = decode_text(_read_input(path) if data is None else data, str(path))
+
+    def invalid(error: json.JSONDecodeError, line: int) -> PrscError:
+        return PrscError(f"invalid JSON: {error.msg}", Span(str(path), line, error.colno, line, error.colno + 1))
+
+    # (line number, scene): split on "\n" only, as the error renderer counts lines.
+    found: list[tuple[int | None, object]] = []
+    listed = True  # several scenes: name the one at fault
+    if path.suffix == ".jsonl":
+        for number, line in enumerate(text.split("\n"), start=1):
+            if line.strip():
+                try:
+                    found.append((number, json.loads(line)))
+                except json.JSONDecodeError as error:
+                    raise invalid(error, number) from None
+    else:
+        try:
+            loaded = json.loads(text)
+        except json.JSONDecodeError as error:
+            raise invalid(error, error.lineno) from None
+        listed = isinstance(loaded, list)
+        found = [(None, s) for s in loaded] if listed else [(None, loaded)]
+    if not found:
+        raise PrscError(f"{path}: no scenes in the file")
+    for k, (line, scene) in enumerate(found):
+        try:
+            parse_scene(scene)  # type: ignore[arg-type]
+        except PrscError as error:
+            message = error.message.removeprefix("scene JSON: ")  # the file name says as much
+            if line is not None:
+                raise PrscError(message, Span(str(path), line, 1, line, 2)) from None
+            raise PrscError(f"{path}: {f'scene {k}: ' if listed else ''}{message}") from None
+    return [scene for _, scene in found]  # type: ignore[misc]
 
 
 def _spec_sampler(spec: str, seed: int) -> Callable[[int], dict]:
@@ -110,14 +146,6 @@ class Job:
 # ------------------------------------------------------------------ one scene
 
 
-def _os_error(error: OSError, path: Path | str | None = None) -> PrscError:
-    where = path or error.filename or "output"
-    reason = os.strerror(error.errno) if error.errno else str(error)
-    if error.errno == errno.ENOSPC:
-        reason = "no space left on device"
-    return PrscError(f"cannot write {where}: {reason}")
-
-
 def render_one(job: Job, index: int) -> tuple[int, dict[str, str], list[str]]:
     """Render and write the missing outputs of one scene; returns its files and warnings."""
     from backends import TARGETS
@@ -149,7 +177,7 @@ def render_one(job: Job, index: int) -> tuple[int, dict[str, str], list[str]]:
                 else:
                     atomic_write(path, data)
             except OSError as error:
-                raise _os_error(error, path) from None
+                raise write_error(error, path) from None
     from backends.bodies import UnknownModelWarning
 
     for w in caught:  # others (e.g. MuJoCo's mesh decoder) go back to Python's filters
@@ -170,13 +198,13 @@ def _worker_init(job: Job) -> None:
 
 
 def _worker_render(index: int) -> tuple[str, Any]:
-    """Worker entry: ('ok', result) or ('error', message) so errors cross process lines."""
+    """Worker entry: ('ok', result) or ('error', (message, span, notes)) so errors cross process lines."""
     try:
         return "ok", render_one(_worker_job, index)
     except PrscError as error:
-        return "error", error.message
+        return "error", (error.message, error.span, error.notes)  # parts: the exception does not pickle whole
     except OSError as error:
-        return "error", _os_error(error).message
+        return "error", (write_error(error).message, None, ())
 
 
 def _run_serial(job: Job, indices: list[int], done: Callable[[tuple[int, dict, list[str]]], None]) -> None:
@@ -191,7 +219,7 @@ def _run_parallel(job: Job, indices: list[int], jobs: int, done: Callable[[tuple
     try:
         for status, value in pool.imap_unordered(_worker_render, indices, chunksize=chunk):
             if status == "error":
-                raise PrscError(value)
+                raise PrscError(*value)
             done(value)
         pool.close()
     except BaseException:
@@ -267,7 +295,7 @@ def _write_manifest(root: Path, manifest: dict) -> None:
     try:
         atomic_write(root / MANIFEST, json.dumps(manifest, indent=1) + "\n")
     except OSError as error:
-        raise _os_error(error, root / MANIFEST) from None
+        raise write_error(error, root / MANIFEST) from None
 
 
 # ------------------------------------------------------------------ the command
@@ -297,25 +325,45 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         raise PrscError(f"-n must be >= 0, got {n}")
     if jobs < 1:
         raise PrscError(f"--jobs must be >= 1, got {jobs}")
+    if seed < 0:
+        raise PrscError(f"--seed must be >= 0, got {seed}")
+    if not output:
+        raise PrscError("the output folder path is empty")
     path = Path(file)
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise PrscError(f"cannot read {file}: {os.strerror(error.errno) if error.errno else error}") from None
-    scenes = _read_scene_file(path) if path.suffix in (".json", ".jsonl") else None
-    if scenes is not None:
+    if path.suffix in (".json", ".jsonl"):
+        data = _read_input(path)
+        scenes: list[dict] | None = _read_scene_file(path, data)
+        sources = hashlib.sha256(data)
         n = len(scenes) if not n else min(n, len(scenes))
-    elif n is None:
-        n = 1
-    # Compile the spec before touching the output folder and before any worker starts:
-    # a bad spec leaves nothing behind and its errors point into the spec.
-    sampler = _spec_sampler(str(file), seed) if scenes is None else None
+        sampler = None
+    else:
+        scenes = None
+        n = 1 if n is None else n
+        # Compile the spec before touching the output folder and before any worker starts:
+        # a bad spec leaves nothing behind and its errors point into the spec. (Also before
+        # reading it whole for the digest: the parser refuses a huge file after 1 MiB.)
+        from prsc.sampling import compile_sampler
+
+        compiled = compile_sampler(str(file), include_dirs=())
+        sampler = functools.partial(compiled.scene, seed)
+        data = _read_input(path)
+        sources = hashlib.sha256(data)
+        for imported in compiled.program.source_files[1:]:
+            # The scenes also depend on every imported file: a change there makes them stale.
+            sources.update(_read_input(Path(imported)))
     width = max(DEFAULT_WIDTH, len(str(max(n - 1, 0))))
-    root = _prepare_root(Path(output), path.stem, targets)
+    root = Path(output) / path.stem
+    # The topmost folder this run creates: removed again if the run fails before any scene.
+    created = next((p for p in (*reversed(root.absolute().parents), root.absolute()) if not p.exists()), None)
+    _prepare_root(Path(output), path.stem, targets)
     _sweep_temporaries(root)
     digest = hashlib.sha256(data).hexdigest()
+    sources_digest = sources.hexdigest()
     manifest = _load_manifest(root)
-    if manifest is not None and (manifest.get("spec_sha256") != digest or manifest.get("seed") != seed):
+    if manifest is not None and (
+        manifest.get("spec_sha256") != digest or manifest.get("sources_sha256") != sources_digest
+        or manifest.get("seed") != seed
+    ):
         _remove_stale(root, manifest)
         manifest = None
     entries: dict[int, dict[str, str]] = {}
@@ -354,6 +402,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             "version": 1,
             "spec": str(file),
             "spec_sha256": digest,
+            "sources_sha256": sources_digest,
             "seed": seed,
             "scenes": [{"index": k, "files": dict(sorted(entries[k].items()))} for k in sorted(entries) if entries[k]],
         }
@@ -372,6 +421,9 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             _run_serial(job, todo, done)
     except BaseException:
         _sweep_temporaries(root)
+        if created is not None and not any(entries.values()):
+            shutil.rmtree(created, ignore_errors=True)  # a failed first run leaves nothing behind
+            raise
         try:  # best effort: record the scenes that were completed
             _write_manifest(root, manifest_now())
         except PrscError:

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from prsc.commands.outputs import output_file, write_error
 from prsc.errors import PrscError
 
 TILE = (320, 240)  # width, height of one scene's image
@@ -27,7 +28,7 @@ def add_parser(subparsers: Any) -> None:
     """Register `prsc preview`."""
     parser = subparsers.add_parser("preview", help="render a contact sheet of sampled scenes", description=__doc__,
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("file", help="a .prs spec, or scene JSON (.json / .jsonl)")
+    parser.add_argument("file", metavar="FILE", help="a .prs spec, or scene JSON (.json / .jsonl)")
     parser.add_argument("-n", "--scenes", type=int, default=16, help="number of scenes (default 16)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("-o", "--output", default="sheet.png", help="output image (default sheet.png)")
@@ -37,8 +38,6 @@ def _scenes(file: str, n: int, seed: int) -> list[dict]:
     from prsc.commands.compile import _read_scene_file, _spec_sampler
 
     path = Path(file)
-    if not path.is_file():
-        raise PrscError(f"cannot read {file}: no such file")
     if path.suffix in (".json", ".jsonl"):
         return _read_scene_file(path)[:n]
     sample = _spec_sampler(file, seed)
@@ -122,11 +121,9 @@ def preview(file: str, n: int, seed: int, output: str) -> Path:
     """Render `n` scenes of `file` into a contact sheet PNG at `output`."""
     if n < 1:
         raise PrscError(f"-n must be >= 1, got {n}")
-    out = Path(output)
-    if out.suffix.lower() != ".png":
+    if Path(output).suffix.lower() != ".png":
         raise PrscError(f"the contact sheet is a PNG: {output} should end in .png")
-    if not out.parent.is_dir():
-        raise PrscError(f"cannot write {output}: folder {out.parent} does not exist")
+    out = output_file(output)
     os.environ.setdefault("MUJOCO_GL", "egl")
     scenes = _scenes(file, n, seed)
     with tempfile.TemporaryDirectory(prefix="prsc-preview-") as tmp:
@@ -141,7 +138,7 @@ def preview(file: str, n: int, seed: int, output: str) -> Path:
     try:
         atomic_write(out, buffer.getvalue())
     except OSError as error:
-        raise PrscError(f"cannot write {output}: {os.strerror(error.errno) if error.errno else error}") from None
+        raise write_error(error, output) from None
     return out
 
 

@@ -18,15 +18,16 @@ def add_parser(subparsers) -> None:
         help="run the handover controller in MuJoCo over N scenes and classify the outcomes",
         description=(
             "Sample N scenes (or read them from scene JSON), compile each to MJCF, run the "
-            "camera + IK handover controller headless, and write DIR/results.jsonl, a summary "
-            "table and plots."
+            "camera + IK handover controller headless, and write OUTPUT/results.jsonl, a summary "
+            "table and plots. The scenes must each hold two Robots (Pandas), two Trays, one Cube "
+            "and one Camera."
         ),
     )
-    parser.add_argument("file", help="a .prs spec, or scenes from `prsc sample` (.jsonl) or one scene (.json)")
+    parser.add_argument("file", metavar="FILE", help="a .prs spec, or scenes from `prsc sample` (.jsonl) or one scene (.json)")
     parser.add_argument("-n", type=int, default=None, help="number of scenes (default 10 for a spec, all for JSON)")
     parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default out/run-<name>)")
-    parser.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K failures")
 
@@ -49,19 +50,34 @@ def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int) -
     return pairs
 
 
+def _check_roles(source: Path, count: int | None, seed: int) -> None:
+    """Refuse scenes that are not handover scenes before anything is compiled or written."""
+    from backends.runner.roles import find_roles
+    from prsc.commands.compile import _read_scene_file, _spec_sampler
+
+    if source.suffix in (".json", ".jsonl"):
+        scenes = _read_scene_file(source)[:count]
+    else:
+        # Every scene of a spec has the same objects and classes: its first one tells.
+        scenes = [_spec_sampler(str(source), seed)(0)]
+    for scene in scenes:
+        find_roles(scene)
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the episodes and report; exit code 0 whatever the outcomes."""
     from rich.console import Console
 
     if args.n is not None and args.n < 1:
-        raise PrscError("-n must be at least 1")
+        raise PrscError(f"-n must be >= 1, got {args.n}")
     if args.jobs < 1:
-        raise PrscError("--jobs must be at least 1")
+        raise PrscError(f"--jobs must be >= 1, got {args.jobs}")
     if args.video < 0:
-        raise PrscError("--video must be 0 or more")
+        raise PrscError(f"--video must be >= 0, got {args.video}")
+    if args.seed < 0:
+        raise PrscError(f"--seed must be >= 0, got {args.seed}")
     source = Path(args.file)
-    if not source.exists():
-        raise PrscError(f"{source}: no such file")
+    _check_roles(source, args.n, args.seed)
     console = Console(stderr=True)
     from backends.runner.batch import EpisodeTask, choose_gl_backend, run_tasks
     from backends.runner.frames import record_episode, write_strip

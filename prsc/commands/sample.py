@@ -13,6 +13,7 @@ import sys
 import tempfile
 from typing import IO, Any
 
+from prsc.commands.outputs import output_file, write_error
 from prsc.errors import PrscError
 
 
@@ -58,19 +59,27 @@ def run(args: argparse.Namespace) -> int:
 
     if args.scenes < 0:
         raise PrscError(f"-n must be >= 0, got {args.scenes}")
-    if args.seed < 0 or args.start < 0:
-        raise PrscError("--seed and --start must be >= 0")
+    for option, value in (("--seed", args.seed), ("--start", args.start)):
+        if value < 0:
+            raise PrscError(f"{option} must be >= 0, got {value}")
+    target = None if args.output is None else output_file(args.output)
     sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length, joint=args.joint)
-    if args.output is None:
+    if target is None:
         stats = write_scenes(sampler, args.seed, args.start, args.scenes, sys.stdout)
         sys.stdout.flush()
     else:
-        target = os.path.abspath(args.output)
-        handle, temp = tempfile.mkstemp(prefix=".prsc-sample-", suffix=".tmp", dir=os.path.dirname(target))
         try:
-            with os.fdopen(handle, "w", encoding="utf-8") as out:
-                stats = write_scenes(sampler, args.seed, args.start, args.scenes, out)
-            os.replace(temp, target)
+            handle, temp = tempfile.mkstemp(prefix=".prsc-sample-", suffix=".tmp", dir=target.absolute().parent)
+        except OSError as error:
+            raise write_error(error, args.output) from None
+        try:
+            try:
+                with os.fdopen(handle, "w", encoding="utf-8") as out:
+                    stats = write_scenes(sampler, args.seed, args.start, args.scenes, out)
+                os.chmod(temp, 0o644)  # mkstemp makes it private; a dataset is for others to read
+                os.replace(temp, target)
+            except OSError as error:
+                raise write_error(error, args.output) from None
         except BaseException:
             if os.path.exists(temp):
                 os.unlink(temp)

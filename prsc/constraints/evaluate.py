@@ -107,6 +107,26 @@ def _arith_operand(v: Any) -> Any:
 
 def binary(op: str, a: Any, b: Any, span: Span | None) -> Any:
     """`a op b` for scalars, vectors and strings."""
+    if _is_number(a) and _is_number(b):
+        return _finite(_binary(op, a, b, span), span)
+    with np.errstate(over="ignore", invalid="ignore"):  # _finite reports an overflow, with its place
+        return _finite(_binary(op, a, b, span), span)
+
+
+def _finite(value: Any, span: Span | None) -> Any:
+    """The value of an arithmetic result, or an error at it when it overflowed to infinity.
+
+    Caught here, where the expression is known: further on an infinite coordinate or size
+    only shows as a solver failure with no location."""
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise _error("the result is too large (it overflows to infinity)", span)
+    elif isinstance(value, np.ndarray) and not np.isfinite(value).all():
+        raise _error("the result is too large (it overflows to infinity)", span)
+    return value
+
+
+def _binary(op: str, a: Any, b: Any, span: Span | None) -> Any:
     a = _arith_operand(a)
     b = _arith_operand(b)
     if _is_number(a) and _is_number(b):
@@ -418,9 +438,10 @@ class ExprCompiler:
         def call(values: list[Any]) -> float:
             nums = [_number(v, f"an argument of {e.func}", span) for v in values]
             try:
-                return float(func(*nums))
+                result = float(func(*nums))
             except (ValueError, TypeError, OverflowError) as error:
                 raise _error(f"{e.func}: {error}", span) from error
+            return _finite(result, span)
 
         if all(a.const for a in args):
             return constant(call([a.value for a in args]))

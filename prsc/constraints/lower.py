@@ -37,6 +37,7 @@ from prsc.constraints.regions import rotation_of
 from prsc.constraints.requires import lower_condition, mentioned_objects
 from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
+from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import irreducible_infeasible_subset, is_feasible
 from prsc.geometry.lp import solve_lp
 from prsc.geometry.polytope import Polytope, intersect
@@ -364,6 +365,17 @@ def explain_empty(
     return infeasible_error(labels, ids, obj, span, what, declarations)
 
 
+def numeric_failure(obj: str, span: Span | None, error: GeometryError) -> PrscError:
+    """A solver failure on an object's rows as an error at the object.
+
+    Seen with coordinates or sizes far beyond any scene (1e300 m): the LPs cannot be
+    solved in floating point, which is the spec's doing, not a bug in prsc."""
+    return PrscError(
+        f"cannot place {obj}: its constraints could not be solved numerically ({error}); "
+        "are its numbers (metres, radians) within a sensible range?", span,
+    )
+
+
 # ---------------------------------------------------------------- objects
 
 
@@ -604,7 +616,12 @@ def lower_program(program: ir.Program) -> ConstraintProgram:
                 tuple(sorted(n for n in mentioned_objects(program.requires[k].condition) if n != program.objects[last].name)),
             )
 
-    plans = [_lower_object(low, obj, per_object[obj.name], soft_index, require_labels) for obj in program.objects]
+    plans = []
+    for obj in program.objects:
+        try:
+            plans.append(_lower_object(low, obj, per_object[obj.name], soft_index, require_labels))
+        except GeometryError as error:
+            raise numeric_failure(obj.name, obj.span, error) from error
 
     scene_checks = []
     require_tests = []

@@ -59,6 +59,11 @@ def _find(name: str, statement: nodes.Statement, importer: str, include_dirs: Se
 
 def load_module_graph(path: str, include_dirs: Sequence[str] = ()) -> ModuleGraph:
     """Parse the spec and, depth first, every file it imports; import cycles are errors."""
+    for directory in include_dirs:
+        # A mistyped --include would otherwise only show as "import not found" (or not at all).
+        if not Path(directory).is_dir():
+            what = "is not a folder" if Path(directory).exists() else "no such folder"
+            raise PrscError(f"--include {directory}: {what}")
     main = os.path.realpath(path)
     graph = ModuleGraph(main=main)
     chain: list[tuple[str, str]] = []  # (real path, display path) of files being loaded

@@ -127,7 +127,8 @@ def describe(binding: object) -> str:
     if isinstance(binding, ClassInfo):
         return f"the class {binding.name}"
     if isinstance(binding, ObjectInfo):
-        return f"the object {binding.name} (a {binding.cls.name})"
+        cls = binding.cls.name
+        return f"the object {binding.name} ({'an' if cls[:1].lower() in 'aeiou' else 'a'} {cls})"
     if isinstance(binding, VariableInfo):
         return f"a variable ({binding.value.type.value})"
     if isinstance(binding, ConstantInfo):

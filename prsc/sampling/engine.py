@@ -28,11 +28,11 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.lower import explain_empty
+from prsc.constraints.lower import explain_empty, numeric_failure
 from prsc.constraints.model import COLLISION, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
-from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
@@ -123,9 +123,11 @@ class SequentialSampler:
         attempts = self.limits.joint_attempts if self.joint else self.limits.scene_attempts
         self._placements = 0
         self._draws = 0
+        tried = 0  # the work budget may end the attempts early: the message says how many ran
         for _ in range(attempts):
             if self._over_budget():
                 break
+            tried += 1
             ctx.rollback(-1)
             ctx.objects.clear()
             ctx.level = -1
@@ -133,7 +135,12 @@ class SequentialSampler:
             if not self._scene_checks_hold(ctx, stats, failure):
                 continue
             placed: list[PlacedBox] = []
-            if not self._place_all(ctx, placed, stats, failure):
+            try:
+                complete = self._place_all(ctx, placed, stats, failure)
+            except GeometryError as error:  # empty and unbounded regions are handled in _place
+                plan = self.runtimes[ctx.level].plan
+                raise numeric_failure(plan.name, plan.span, error) from error
+            if not complete:
                 continue
             if self.joint and not self._joint_ok(ctx, placed, stats, failure):
                 continue
@@ -141,7 +148,7 @@ class SequentialSampler:
             params = evaluate_params(self.cprog, ctx)
             objects = [ctx.objects[rt.plan.name] for rt in self.runtimes]
             return SceneResult(objects, params, stats, ctx)
-        raise self._error(seed, index, stats, failure, attempts)
+        raise self._error(seed, index, stats, failure, tried)
 
     def _scene_checks_hold(self, ctx: SceneContext, stats: RejectionStats, failure: _Failure) -> bool:
         for check in self.cprog.scene_checks:

@@ -11,9 +11,10 @@ rejects the whole scene, counted by cause as in the paper's Table II.
 from __future__ import annotations
 
 from prsc.constraints.context import SceneContext
+from prsc.constraints.lower import numeric_failure
 from prsc.constraints.model import COLLISION, CONTAINMENT, REQUIRE, ConstraintProgram, RequireCheck, RowLabel
 from prsc.errors import PrscError
-from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.sampling.collisions import PlacedBox, first_hit, near
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.regions import violated_rule
@@ -52,7 +53,11 @@ class RejectionSampler:
             placed: list[PlacedBox] = []
             k = 0
             while cause is None and k < len(self.runtimes):
-                cause = self._place(k, ctx, placed, labels)
+                try:
+                    cause = self._place(k, ctx, placed, labels)
+                except GeometryError as error:  # empty and unbounded regions are handled in _place
+                    plan = self.runtimes[k].plan
+                    raise numeric_failure(plan.name, plan.span, error) from error
                 k += 1
             if cause is None:
                 ctx.level = len(self.runtimes)

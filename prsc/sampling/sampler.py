@@ -50,7 +50,7 @@ class Sampler:
         self._engine: SequentialSampler | RejectionSampler
         # Objects whose properties never change get their JSON built once.
         self.templates: list[dict[str, Any] | None] = [
-            object_template(plan.name, plan.class_name, plan.static_props) if set(plan.property_fns) <= set(plan.static_props) else None
+            object_template(plan.name, plan.class_name, plan.static_props, plan.span) if set(plan.property_fns) <= set(plan.static_props) else None
             for plan in self.constraints.objects
         ]
         if sampler == "rejection":

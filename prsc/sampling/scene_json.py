@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue
-from prsc.errors import PrscError
+from prsc.errors import PrscError, Span
 from prsc.geometry.rotations import matrix_to_quat
 
 FORMAT = "prsc-scene"
@@ -154,8 +154,31 @@ def shape_of(props: dict[str, Any]) -> str:
     return SHAPES[text]
 
 
+def _camera_json(props: dict[str, Any], name: str) -> dict[str, Any]:
+    """The camera intrinsics of an object: fovy in (0, 180) degrees, resolution [w, h] in pixels."""
+    fovy = props.get("fovy", DEFAULT_CAMERA["fovy"])
+    if isinstance(fovy, bool) or not isinstance(fovy, (int, float)) or not 0.0 < fovy < 180.0:
+        raise PrscError(f"fovy of {name} must be an angle in (0, 180) degrees, got {fovy!r}")
+    resolution = props.get("resolution", DEFAULT_CAMERA["resolution"])
+    if (
+        not isinstance(resolution, (tuple, list)) or len(resolution) != 2
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) and v >= 1 and v == int(v) for v in resolution)
+    ):
+        raise PrscError(f"resolution of {name} must be [width, height] in whole pixels, got {json_value(resolution)!r}")
+    return {"fovy": float(fovy), "resolution": [int(v) for v in resolution]}
+
+
 def object_json(obj: ObjectValue) -> dict[str, Any]:
-    """One object of the scene JSON."""
+    """One object of the scene JSON (a bad property value is an error at the object)."""
+    try:
+        return _object_json(obj)
+    except PrscError as error:
+        if error.span is not None or obj.span is None:
+            raise
+        raise PrscError(error.message, obj.span, error.notes) from None
+
+
+def _object_json(obj: ObjectValue) -> dict[str, Any]:
     props = obj.props
     assert obj.position is not None and obj.rotation is not None and obj.dims is not None
     model = model_of(props, obj.class_name)
@@ -166,10 +189,9 @@ def object_json(obj: ObjectValue) -> dict[str, Any]:
     w, l, h = obj.dims
     mass = props.get("mass")
     mass = DENSITY * w * l * h if mass is None else float(mass)
-    camera = None
-    if is_camera:
-        resolution = props.get("resolution", DEFAULT_CAMERA["resolution"])
-        camera = {"fovy": float(props.get("fovy", DEFAULT_CAMERA["fovy"])), "resolution": [int(v) for v in resolution]}
+    if not 0.0 <= mass < math.inf:
+        raise PrscError(f"mass of {obj.name} must be a number >= 0 (kg), got {mass!r}")
+    camera = _camera_json(props, obj.name) if is_camera else None
     extra = {k: json_value(v) for k, v in props.items() if k not in _MAPPED}
     if props.get("allowCollisions"):
         extra["allowCollisions"] = True
@@ -211,10 +233,10 @@ def scene_json(
     }
 
 
-def object_template(name: str, class_name: str, props: dict[str, Any]) -> dict[str, Any]:
+def object_template(name: str, class_name: str, props: dict[str, Any], span: Span | None = None) -> dict[str, Any]:
     """Everything but the pose of an object whose properties are the same in every scene."""
     dims = tuple(float(props[d]) for d in ("width", "length", "height"))
-    stand_in = ObjectValue(name, class_name, None, np.zeros(3), np.eye(3), dims, dict(props))  # type: ignore[arg-type]
+    stand_in = ObjectValue(name, class_name, span, np.zeros(3), np.eye(3), dims, dict(props))  # type: ignore[arg-type]
     return object_json(stand_in)
 
 

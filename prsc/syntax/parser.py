@@ -138,6 +138,9 @@ def _syntax_error(path: str, error: UnexpectedInput) -> PrscError:
         span = Span(path, error.line, error.column, error.line, error.column + 1)
         if char in "\"'":
             return PrscError("unterminated string", span)
+        if char.isalpha():  # a letter the lexer refused: not ASCII
+            return PrscError(f"unexpected character '{shown}': names are ASCII letters, digits and _ "
+                             "(any text may go in a string)", span)
         return PrscError(f"unexpected character '{shown}'", span)
     if isinstance(error, UnexpectedEOF):  # pragma: no cover - LALR reports $END as a token
         return PrscError(f"unexpected end of file; expected {_describe_expected(set(error.expected))}", None)
@@ -147,8 +150,14 @@ def _syntax_error(path: str, error: UnexpectedInput) -> PrscError:
 def decode_source(data: bytes, path: str) -> str:
     """The text of a spec file: UTF-8 (a BOM allowed); anything else is an error at its byte."""
     if len(data) > MAX_SOURCE_BYTES:
-        raise PrscError(f"file too large ({len(data) / 1e6:.1f} MB; a spec may be at most "
+        size = f"{len(data) / 1e6:.1f} MB" if len(data) > MAX_SOURCE_BYTES + 1 else "over 1 MiB"
+        raise PrscError(f"file too large ({size}; a spec may be at most "
                         f"{MAX_SOURCE_BYTES // (1024 * 1024)} MiB)", Span(path, 1, 1, 1, 1))
+    return decode_text(data, path)
+
+
+def decode_text(data: bytes, path: str) -> str:
+    """UTF-8 text of any size (a BOM allowed); anything else is an error at the offending byte."""
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
@@ -181,7 +190,9 @@ def parse_file(path: str | Path) -> nodes.Module:
     """Read and parse one spec file."""
     name = str(path)
     try:
-        data = Path(path).read_bytes()
+        with open(path, "rb") as handle:
+            # One byte past the limit is enough to refuse; reading on would never end on /dev/zero.
+            data = handle.read(MAX_SOURCE_BYTES + 1)
     except IsADirectoryError:
         raise PrscError(f"{name} is a directory, not a spec file") from None
     except OSError as error:

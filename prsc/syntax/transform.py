@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast as python_ast
+import math
 import warnings
 
 from lark import Token, Transformer, v_args
@@ -210,7 +211,10 @@ class ToAst(Transformer):
         return n.Call(self._span(meta), func, self._exprs(children[1:]))
 
     def number(self, meta, children):
-        return n.Number(self._span(meta), float(children[0]))
+        value = float(children[0])
+        if not math.isfinite(value):  # 1e400 reads as infinity: no length or angle is that
+            raise PrscError(f"number {children[0]} is too large", self._span(meta))
+        return n.Number(self._span(meta), value)
 
     def string(self, meta, children):
         return n.String(self._span(meta), _decode_string(self.path, children[0]))

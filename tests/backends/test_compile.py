@@ -264,3 +264,95 @@ def test_a_bad_spec_is_reported_with_its_location_and_writes_nothing(tmp_path, c
     err = capsys.readouterr().err
     assert f"{spec}:2:" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_scene_files_are_checked_before_anything_is_written(tmp_path, capsys):
+    """Binary, empty or malformed scene files: exit 2 at the scene's line (or position), no output."""
+    out = tmp_path / "out"
+    garbage = tmp_path / "garbage.json"
+    garbage.write_bytes(b"\xc1\x00\xff binary")
+    assert main(["compile", str(garbage), "-o", str(out)]) == 2
+    assert f"{garbage}:1:1: error: the file is not valid UTF-8 text (byte 0xc1)" in capsys.readouterr().err
+    for name, text in [("none.json", "[]"), ("none.jsonl", "\n\n")]:
+        (tmp_path / name).write_text(text)
+        assert main(["compile", str(tmp_path / name), "-o", str(out)]) == 2
+        assert capsys.readouterr().err == f"prsc: error: {tmp_path / name}: no scenes in the file\n"
+    good, bad = _scenes(2)
+    del bad["objects"][1]["position"]
+    lines = _jsonl(tmp_path, [good, good, bad])
+    lines.write_text(lines.read_text().replace("\n", "\n\n", 1))  # a blank line: line numbers still count it
+    assert main(["compile", str(lines), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{lines}:4:1: error: object 'cube'.position: expected a list of 3 numbers, got None")
+    listed = tmp_path / "listed.json"
+    listed.write_text(json.dumps([good, bad]))
+    assert main(["compile", str(listed), "-o", str(out)]) == 2
+    assert capsys.readouterr().err == (
+        f"prsc: error: {listed}: scene 1: object 'cube'.position: expected a list of 3 numbers, got None\n")
+    broken = tmp_path / "broken.jsonl"
+    broken.write_text(json.dumps(good) + "\n" + '{"format" "prsc-scene"}\n')
+    assert main(["compile", str(broken), "-o", str(out)]) == 2
+    assert capsys.readouterr().err.startswith(f"{broken}:2:11: error: invalid JSON: Expecting ':' delimiter")
+    for field, value, message in [("params", "x", "params: expected an object, got 'x'"),
+                                  ("index", -5, "index: expected a non-negative integer, got -5"),
+                                  ("seed", "abc", "seed: expected a non-negative integer, got 'abc'")]:
+        one = tmp_path / "one.json"
+        one.write_text(json.dumps(dict(good, **{field: value})))
+        assert main(["compile", str(one), "-o", str(out)]) == 2
+        assert capsys.readouterr().err == f"prsc: error: {one}: {message}\n"
+    assert not out.exists()
+
+
+def test_a_changed_imported_file_rewrites_the_scenes(tmp_path):
+    """The scenes depend on every file the spec imports, not only on the spec itself."""
+    (tmp_path / "lib.prs").write_text("class Box:\n    width: 0.1\n")
+    spec = tmp_path / "main.prs"
+    spec.write_text("from lib import *\nb = Box at Vector3D(0, 0, 1)\n")
+    root = compile_scenes(str(spec), ["json"], 1, 0, str(tmp_path / "out"))
+    assert json.loads((root / "json" / "00000.json").read_text())["objects"][0]["dimensions"][0] == 0.1
+    (tmp_path / "lib.prs").write_text("class Box:\n    width: 0.25\n")
+    compile_scenes(str(spec), ["json"], 1, 0, str(tmp_path / "out"))
+    assert json.loads((root / "json" / "00000.json").read_text())["objects"][0]["dimensions"][0] == 0.25
+
+
+def test_a_first_run_that_fails_leaves_nothing_behind(tmp_path, capsys):
+    """A spec infeasible only when sampled: no empty folders or manifest are left."""
+    spec = tmp_path / "tiny_table.prs"
+    spec.write_text("from tabletop import *\n"
+                    "table = Table on Vector3D(0, 0, 0), with width (0.2, 0.3), with length (0.2, 0.3)\n"
+                    "c = Cube completely on table, with width 1.0, with length 1.0\n")
+    out = tmp_path / "new" / "out"
+    assert main(["compile", str(spec), "--target", "json,mjcf", "-o", str(out)]) == 2
+    assert f"{spec}:3:1: error: could not sample scene 0 (seed 0)" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()
+
+
+def test_bad_options(tmp_path, capsys):
+    source = _jsonl(tmp_path, _scenes(1))
+    assert main(["compile", str(source), "-o", ""]) == 2
+    assert capsys.readouterr().err == "prsc: error: the output folder path is empty\n"
+    assert main(["compile", str(source), "--seed", "-1", "-o", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == "prsc: error: --seed must be >= 0, got -1\n"
+    assert main(["compile", str(tmp_path), "-o", str(tmp_path / "o")]) == 2
+    assert capsys.readouterr().err == f"prsc: error: {tmp_path} is a directory, not a spec file\n"
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_error_in_a_worker_keeps_its_location(tmp_path, capsys):
+    """--jobs 2: a scene that cannot be sampled is reported with its notes, as with one job."""
+    spec = tmp_path / "flaky.prs"
+    spec.write_text("x = (0, 1)\nt = Object at Vector3D(0, 0, 1)\nrequire x > 0.9\n")  # fails 12% of scenes
+    assert main(["compile", str(spec), "-n", "40", "--jobs", "2", "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "could not sample scene" in err and f"{spec}:3:1: note: this require: require x > 0.9" in err
+
+
+def test_a_body_too_light_for_mujoco_is_a_clear_error(tmp_path, capsys):
+    """MuJoCo refuses a moving body under 1e-15 kg (m^2): say which object, not an internal error."""
+    dust = scene([obj("dust", "Object", (0, 0, 1), (1e-6, 1e-6, 1e-6))])
+    assert main(["compile", str(_jsonl(tmp_path, [dust])), "--target", "mjcf", "-o", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("prsc: error: scene 0: object 'dust' cannot move in MuJoCo: its mass (5e-16 kg) and principal "
+                          "inertia (smallest 8.33e-29 kg m^2) must exceed 1e-15")
+    pinned = scene([obj("dust", "Object", (0, 0, 1), (1e-6, 1e-6, 1e-6), static=True)])
+    assert main(["compile", str(_jsonl(tmp_path, [pinned])), "--target", "mjcf", "-o", str(tmp_path / "o")]) == 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from prsc.cli import main
 from tests.backends.scenes import cube_in_air, tray_with_cube
@@ -36,3 +37,21 @@ def test_preview_errors_are_clear(tmp_path, capsys):
     source.write_text(json.dumps(cube_in_air()))
     assert main(["preview", str(source), "-o", str(tmp_path / "nowhere" / "s.png")]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def test_preview_refuses_bad_paths_before_rendering(tmp_path, capsys, monkeypatch):
+    """A folder at -o, a folder as input, a file without scenes: exit 2, nothing rendered."""
+    from prsc.commands import preview
+
+    monkeypatch.setattr(preview, "render_scene", lambda *a: pytest.fail("rendered before the check"))
+    source = tmp_path / "one.json"
+    source.write_text(json.dumps(cube_in_air()))
+    (tmp_path / "sheet.png").mkdir()
+    assert main(["preview", str(source), "-o", str(tmp_path / "sheet.png")]) == 2
+    assert capsys.readouterr().err == f"prsc: error: cannot write {tmp_path / 'sheet.png'}: it is a folder\n"
+    assert main(["preview", str(tmp_path), "-o", str(tmp_path / "s.png")]) == 2
+    assert capsys.readouterr().err == f"prsc: error: {tmp_path} is a directory, not a spec file\n"
+    (tmp_path / "none.json").write_text("[]")
+    assert main(["preview", str(tmp_path / "none.json"), "-o", str(tmp_path / "s.png")]) == 2
+    assert capsys.readouterr().err == f"prsc: error: {tmp_path / 'none.json'}: no scenes in the file\n"
+    assert not (tmp_path / "s.png").exists()

@@ -39,3 +39,11 @@ def test_binary_source_line_is_printable(tmp_path):
 
 def test_error_without_span_names_the_tool():
     assert format_error(PrscError("no input files")) == "prsc: error: no input files\n"
+
+
+def test_a_line_that_never_ends_is_cut_not_read_whole():
+    """/dev/zero has one endless line: the caret block shows a bounded piece of it."""
+    text = format_error(PrscError("file too large", Span("/dev/zero", 1, 1, 1, 2)))
+    lines = text.splitlines()
+    assert lines[0] == "/dev/zero:1:1: error: file too large"
+    assert len(lines[1]) < 200 and lines[2].strip() == "^"

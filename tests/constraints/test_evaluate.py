@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -175,3 +176,18 @@ def test_regions_evaluate_to_h_representations():
     rect = ir.RegionExpr(S, T.REGION, "rectangle", (("position", vec(0, 0, 0)), ("orientation", vec(0, 0, 0)), ("width", num(5)), ("length", num(5))))
     plane = c.compile(rect).value
     assert plane.planar and np.allclose(plane.normal, [0, 0, 1])
+
+
+def test_overflow_to_infinity_is_a_user_error_at_the_expression():
+    """1e300 * 1e300 is an error where it is written, not an infinite size or coordinate later."""
+    with pytest.raises(PrscError, match="too large") as info:
+        compiler().compile(binop("*", num(1e300), num(1e300)))
+    assert info.value.span == S
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's overflow warning would print before the error
+        with pytest.raises(PrscError, match="too large") as info:
+            compiler().compile(binop("*", vec(0, 0, 1e300), num(1e300), T.VECTOR))
+    assert info.value.span == S
+    drawn = compiler().compile(binop("*", rng_range(1e300, 2e300, draw_id=1), num(1e300)))
+    with pytest.raises(PrscError, match="too large"):
+        drawn.fn(ctx())

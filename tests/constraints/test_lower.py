@@ -184,3 +184,12 @@ def test_scene_context_memo_is_not_shared_between_scenes():
     assert a.uniform() == b.uniform()
     a.remember_draw(1, 0.5)
     assert 1 not in b.draws
+
+
+def test_coordinates_beyond_floating_point_are_an_error_at_the_object(tmp_path):
+    """1e300 m breaks the LPs; that is reported at the object, not as an internal error."""
+    spec = tmp_path / "spec.prs"
+    spec.write_text("from tabletop import *\nt = Table on Vector3D(0, 0, 0)\nc = Cube completely on t, ahead of t by 1e300\n")
+    with pytest.raises(PrscError, match="cannot place c: its constraints could not be solved numerically") as info:
+        lower_program(compile_program(str(spec), ()))
+    assert (info.value.span.line, info.value.span.column) == (3, 1)

@@ -223,6 +223,16 @@ def test_imports_search_next_to_file_then_include_dirs(tmp_path):
     assert len(program.source_files) == 3
 
 
+def test_an_include_dir_that_is_not_a_folder_is_an_error(tmp_path):
+    """A mistyped --include is reported, even when no import needs it."""
+    with pytest.raises(PrscError) as caught:
+        compile_text(tmp_path, "x = 1\n", include_dirs=[str(tmp_path / "nowhere")])
+    assert caught.value.message == f"--include {tmp_path / 'nowhere'}: no such folder"
+    (tmp_path / "a_file").write_text("")
+    with pytest.raises(PrscError, match="is not a folder"):
+        compile_text(tmp_path, "x = 1\n", include_dirs=[str(tmp_path / "a_file")])
+
+
 def test_import_cycle_names_the_chain(tmp_path):
     (tmp_path / "a.prs").write_text("from b import *\n")
     (tmp_path / "b.prs").write_text("from a import *\n")

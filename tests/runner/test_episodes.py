@@ -57,6 +57,33 @@ def test_prsc_run_names_missing_roles(table_cube, tmp_path, capsys):
     assert not (tmp_path / "run" / "results.jsonl").exists()
 
 
+def test_prsc_run_refuses_a_spec_without_the_roles_before_compiling(tmp_path, capsys):
+    """specs/shelf_bin.prs has one Robot and no Tray or Cube: exit 2 at once, nothing written."""
+    spec = Path(__file__).resolve().parents[2] / "specs" / "shelf_bin.prs"
+    out = tmp_path / "run"
+    assert main(["run", str(spec), "-n", "3", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"prsc: error: scene {spec} #0 does not fit the handover task: it needs 2 Robots (found 1), "
+                   "2 Trays (found 0), 1 Cube (found 0); the runner expects two Robots, two Trays, one Cube and one Camera\n")
+    assert not out.exists()
+
+
+def test_prsc_run_input_errors(tmp_path, capsys):
+    """A malformed line of a .jsonl is named by its line; a missing file and a bad seed are plain errors."""
+    scenes = tmp_path / "scenes.jsonl"
+    scenes.write_text('{"format": "prsc-scene", "version": 1, "objects": []}\n{"oops"\n')
+    assert main(["run", str(scenes), "-o", str(tmp_path / "run")]) == 2
+    assert capsys.readouterr().err.startswith(f"{scenes}:2:8: error: invalid JSON: Expecting ':' delimiter")
+    assert main(["run", str(tmp_path / "missing.prs"), "-o", str(tmp_path / "run")]) == 2
+    assert capsys.readouterr().err == f"prsc: error: cannot read {tmp_path / 'missing.prs'}: No such file or directory\n"
+    for option, value, message in [("--seed", "-1", "--seed must be >= 0, got -1"), ("-n", "0", "-n must be >= 1, got 0"),
+                                   ("--jobs", "-1", "--jobs must be >= 1, got -1"),
+                                   ("--video", "-2", "--video must be >= 0, got -2")]:
+        assert main(["run", str(scenes), option, value, "-o", str(tmp_path / "run")]) == 2
+        assert capsys.readouterr().err == f"prsc: error: {message}\n"
+    assert not (tmp_path / "run").exists()
+
+
 def test_prsc_run_three_episodes_of_the_original_spec(tmp_path, capsys):
     """`prsc run` on the original ProbRobScene tableCube.prs, unmodified: 3 episodes, 2 workers."""
     spec = Path(__file__).resolve().parents[2] / ".." / "shared" / "specs" / "original" / "tableCube.prs"

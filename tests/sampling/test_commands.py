@@ -78,3 +78,74 @@ def test_bench_table(capsys):
     assert main(["bench", TABLE_CUBE, "-n", "3", "--samplers", "exact"]) == 0
     out = capsys.readouterr().out
     assert "scenes/s" in out and "exact" in out
+
+
+def test_sample_output_path_is_checked_before_sampling(tmp_path, capsys):
+    """-o under a file, at a folder, in a missing folder or empty: exit 2 with why, nothing written."""
+    blocker = tmp_path / "a_file"
+    blocker.write_text("x")
+    cases = [
+        (str(blocker / "x.jsonl"), f"cannot write {blocker / 'x.jsonl'}: {blocker} is not a folder"),
+        (str(tmp_path), f"cannot write {tmp_path}: it is a folder"),
+        (str(tmp_path / "nowhere" / "x.jsonl"), f"cannot write {tmp_path / 'nowhere' / 'x.jsonl'}: folder {tmp_path / 'nowhere'} does not exist"),
+        ("", "the output path is empty"),
+    ]
+    for output, message in cases:
+        assert main(["sample", TABLE_CUBE, "-o", output]) == 2
+        assert capsys.readouterr().err == f"prsc: error: {message}\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]
+
+
+def test_sample_file_is_readable_by_others(tmp_path):
+    """The temporary file is private (mkstemp); the dataset it becomes is not."""
+    out = tmp_path / "scenes.jsonl"
+    assert main(["sample", TABLE_CUBE, "-o", str(out)]) == 0
+    assert out.stat().st_mode & 0o777 == 0o644
+
+
+def test_sample_names_the_bad_option(capsys):
+    assert main(["sample", TABLE_CUBE, "--start", "-3"]) == 2
+    assert capsys.readouterr().err == "prsc: error: --start must be >= 0, got -3\n"
+
+
+def test_bench_refuses_bad_counts_and_reports_spec_errors_as_such(tmp_path, capsys):
+    for option, value, message in [("-n", "0", "-n must be >= 1, got 0"), ("-n", "-4", "-n must be >= 1, got -4"),
+                                   ("--seconds", "0", "--seconds must be > 0, got 0.0"),
+                                   ("--seconds", "nan", "--seconds must be > 0, got nan")]:
+        assert main(["bench", TABLE_CUBE, "--samplers", "exact", option, value]) == 2
+        assert capsys.readouterr().err == f"prsc: error: {message}\n"
+    spec = tmp_path / "tiny_table.prs"
+    spec.write_text("from tabletop import *\n"
+                    "table = Table on Vector3D(0, 0, 0), with width (0.2, 0.3), with length (0.2, 0.3)\n"
+                    "c = Cube completely on table, with width 1.0, with length 1.0\n")
+    assert main(["bench", str(spec), "--samplers", "exact", "-n", "2"]) == 2
+    err = capsys.readouterr().err
+    # Formatted once, in this process, with its location and notes (not "prsc: error: <file>:...").
+    assert err.startswith(f"{spec}:3:1: error: could not sample scene") and f"{spec}:3:10: note: conflicting" in err
+
+
+def test_bench_reports_a_crash_of_its_process_as_an_internal_error(monkeypatch, capsys):
+    """A bug in the measuring process is exit 3, never passed off as the user's error."""
+    from prsc.commands import bench
+
+    def broken(*args):
+        raise ZeroDivisionError("division by zero")
+
+    monkeypatch.setattr(bench, "measure", broken)
+    assert main(["bench", TABLE_CUBE, "--samplers", "exact", "-n", "2"]) == 3
+    assert "prsc: internal error: BenchmarkProcessError: ZeroDivisionError: division by zero" in capsys.readouterr().err
+
+
+def test_sample_into_a_read_only_folder_simulated(tmp_path, capsys, monkeypatch):
+    """EACCES on creating the temporary file (tests run as root, where permissions are not enforced)."""
+    import errno
+    import tempfile
+
+    def denied(*args, **kwargs):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    monkeypatch.setattr(tempfile, "mkstemp", denied)
+    out = tmp_path / "scenes.jsonl"
+    assert main(["sample", TABLE_CUBE, "-o", str(out)]) == 2
+    assert capsys.readouterr().err == f"prsc: error: cannot write {out}: Permission denied\n"
+    assert list(tmp_path.iterdir()) == []

@@ -138,3 +138,36 @@ def test_many_specifiers_spec_is_valid_under_exact_and_hit_and_run():
         sampler = Sampler(program, name)
         for i in range(n):
             assert check_scene(program, sampler.scene(6, i)) == [], (name, i)
+
+
+@pytest.mark.parametrize("name", ["exact", "rejection"])
+def test_a_solver_failure_while_sampling_is_an_error_at_the_object(tmp_path, monkeypatch, name):
+    """A region rebuilt per scene (random table size) whose LP fails numerically: exit 2 at the object."""
+    from prsc.geometry.exceptions import GeometryError
+    from prsc.sampling import regions
+
+    sampler, _ = _sampler(tmp_path, "t = Table on Vector3D(0, 0, 0), with width (1, 2)\nc = Cube completely on t\n", name)
+
+    def failing(poly):
+        raise GeometryError("HiGHS failed on a 12x4 LP: Not Set")
+
+    monkeypatch.setattr(regions, "prepare_sampler", failing)
+    with pytest.raises(PrscError, match="cannot place c: its constraints could not be solved numerically") as info:
+        sampler.sample(0, 0)
+    assert (info.value.span.line, info.value.span.column) == (3, 1)
+
+
+def test_the_failure_message_counts_the_attempts_really_made(tmp_path):
+    """With --joint the work budget ends a hopeless scene long before 100000 attempts: say so."""
+    import re
+
+    sampler, _ = _sampler(
+        tmp_path,
+        "t = Table on Vector3D(0, 0, 0), with width (0.2, 0.3), with length (0.2, 0.3)\n"
+        "c = Cube completely on t, with width 1.0, with length 1.0\n",
+        joint=True,
+    )
+    with pytest.raises(PrscError) as info:
+        sampler.sample(0, 0)
+    tried = int(re.search(r"in (\d+) attempts", info.value.message).group(1))
+    assert 0 < tried < sampler._engine.limits.joint_attempts

@@ -72,3 +72,22 @@ def test_colours():
         color_rgba("not-a-colour")
     with pytest.raises(PrscError):
         color_rgba("1.5")
+
+
+@pytest.mark.parametrize("props,message", [
+    ('with color "nocolour"', "unknown colour 'nocolour' of c"),
+    ('with color "3"', "grey level '3' of c is not in [0, 1]"),
+    ('with shape "cone"', "unknown shape 'cone'"),
+    ("with mass -5", "mass of c must be a number >= 0 (kg), got -5.0"),
+    ("with camera True, with fovy 200", "fovy of c must be an angle in (0, 180) degrees, got 200.0"),
+    ('with camera True, with resolution [640, "a"]', "resolution of c must be [width, height] in whole pixels"),
+    ("with camera True, with resolution [640.5, 480]", "resolution of c must be [width, height] in whole pixels"),
+])
+@pytest.mark.parametrize("width", ["0.1", "(0.1, 0.2)"], ids=["same_every_scene", "random"])
+def test_bad_property_values_are_errors_at_the_object(tmp_path, props, message, width):
+    spec = tmp_path / "props.prs"
+    spec.write_text(f"x = 1\nc = Object at Vector3D(0, 0, 1), with width {width}, {props}\n")
+    with pytest.raises(PrscError) as info:
+        compile_sampler(str(spec)).scene(0, 0)
+    assert message in info.value.message
+    assert (info.value.span.path, info.value.span.line, info.value.span.column) == (str(spec), 2, 1)

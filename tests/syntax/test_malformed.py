@@ -66,6 +66,9 @@ CASES = [
     ("too_deep", "x = " + "(" * 150 + "1" + ")" * 150 + "\n", 1, 105, "nested more than 100 deep"),
     ("invalid_escape", "x = \"\\N{nope}\"\n", 1, 5, "invalid string literal"),
     ("call_a_class", H + "c = Cube(1)\n", 2, 5, "'Cube' is a class"),
+    ("number_too_large", H + "c = Cube with width 1e400\n", 2, 21, "number 1e400 is too large"),
+    ("non_ascii_name", "class Th\u00efng:\n    width: 1\n", 1, 9, "names are ASCII letters, digits and _"),
+    ("redefined_article", H + "c = Object\nc = Cube\n", 3, 1, "already defined as the object c (an Object)"),
 ]
 
 
