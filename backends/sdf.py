@@ -21,13 +21,14 @@ from pathlib import Path
 import numpy as np
 
 from assets.urdf_tree import Geometry, RobotTree, read_urdf
-from backends.bodies import CAMERA_QUAT_POS_X, Body, resolve_bodies
+from backends.bodies import Body, resolve_bodies
+from backends.gazebo_camera import camera_sensor_body
 from backends.inertia import Inertial
 from backends.mjcf import FRICTION
 from backends.numbers import num, nums
 from backends.scene import Scene
 from backends.store import AssetStore, relative_path, robot_urdf_source
-from backends.urdf import horizontal_fov, robot_base_yaw
+from backends.urdf import robot_base_yaw
 from backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 from prsc.geometry.rotations import matrix_to_rpy, quat_to_rpy, rot_z
@@ -105,17 +106,8 @@ def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
         _part_geometry(visual, part, folder)
         _material(visual, obj.color)
     if body.camera is not None:
-        cam = body.camera
         sensor = ET.SubElement(link, "sensor", name=obj.name, type="camera")
-        _pose(sensor, (0.0, 0.0, 0.0), CAMERA_QUAT_POS_X)
-        camera = ET.SubElement(sensor, "camera")
-        ET.SubElement(camera, "horizontal_fov").text = num(horizontal_fov(cam.fovy, cam.width, cam.height))
-        image = ET.SubElement(camera, "image")
-        ET.SubElement(image, "width").text = str(cam.width)
-        ET.SubElement(image, "height").text = str(cam.height)
-        clip = ET.SubElement(camera, "clip")
-        ET.SubElement(clip, "near").text = "0.01"
-        ET.SubElement(clip, "far").text = "100"
+        camera_sensor_body(sensor, body.camera)
         ET.SubElement(sensor, "always_on").text = "true"
         ET.SubElement(sensor, "update_rate").text = "30"
 

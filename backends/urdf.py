@@ -15,12 +15,12 @@ intrinsics in `scene.json` and a Gazebo `<sensor type="camera">` extension.
 from __future__ import annotations
 
 import json
-import math
 import xml.etree.ElementTree as ET
 from functools import lru_cache
 from pathlib import Path
 
-from backends.bodies import CAMERA_QUAT_POS_X, Body, resolve_bodies
+from backends.bodies import Body, resolve_bodies
+from backends.gazebo_camera import camera_sensor_body
 from backends.inertia import Inertial
 from backends.numbers import num, nums
 from backends.scene import Scene
@@ -87,24 +87,9 @@ def _parts_urdf(body: Body, folder: Path) -> ET.Element:
 
 
 def _gazebo_camera(robot: ET.Element, body: Body) -> None:
-    """Gazebo's camera sensor extension (looks along its +X, +Z up) on the object link."""
-    cam = body.camera
+    """Gazebo's camera sensor extension on the object link."""
     gazebo = ET.SubElement(robot, "gazebo", reference=body.name)
-    sensor = ET.SubElement(gazebo, "sensor", type="camera", name=body.name)
-    ET.SubElement(sensor, "pose").text = "0 0 0 " + nums(quat_to_rpy(CAMERA_QUAT_POS_X))
-    camera = ET.SubElement(sensor, "camera")
-    ET.SubElement(camera, "horizontal_fov").text = num(horizontal_fov(cam.fovy, cam.width, cam.height))
-    image = ET.SubElement(camera, "image")
-    ET.SubElement(image, "width").text = str(cam.width)
-    ET.SubElement(image, "height").text = str(cam.height)
-    clip = ET.SubElement(camera, "clip")
-    ET.SubElement(clip, "near").text = "0.01"
-    ET.SubElement(clip, "far").text = "100"
-
-
-def horizontal_fov(fovy_deg: float, width: int, height: int) -> float:
-    """Horizontal field of view (radians) of a pinhole camera with vertical fov `fovy_deg`."""
-    return 2 * math.atan(math.tan(math.radians(fovy_deg) / 2) * width / height)
+    camera_sensor_body(ET.SubElement(gazebo, "sensor", type="camera", name=body.name), body.camera)
 
 
 @lru_cache(maxsize=16)

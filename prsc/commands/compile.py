@@ -1,6 +1,6 @@
 """`prsc compile`: sample scenes of a spec and write them in simulator formats.
 
-    prsc compile FILE --target mjcf,urdf -n 100 --seed 0 -o out [--jobs 2]
+    prsc compile FILE --target mjcf,urdf -n 100 --seed 0 -o out [--jobs 2] [-I DIR]
 
 writes under `out/<spec stem>/` one file (or bundle folder) per scene and target, named by
 the zero-padded scene index (`mjcf/00007.xml`, `urdf/00007/`, ...), the shared assets
@@ -23,7 +23,7 @@ import sys
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Sequence
 
 from prsc.commands.outputs import write_error
 from prsc.errors import PrscError, Span
@@ -44,6 +44,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("-o", "--output", default="out", help="output folder (default out)")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
+    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
 
 
 # ------------------------------------------------------------------ scene sources
@@ -102,11 +103,11 @@ def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
     return [scene for _, scene in found]  # type: ignore[misc]
 
 
-def _spec_sampler(spec: str, seed: int) -> Callable[[int], dict]:
+def _spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = ()) -> Callable[[int], dict]:
     """Scene k of a .prs spec as scene JSON (the sampler is imported only when needed)."""
     from prsc.sampling import compile_sampler
 
-    sampler = compile_sampler(spec, include_dirs=())
+    sampler = compile_sampler(spec, include_dirs=include_dirs)
     return lambda index: sampler.scene(seed=seed, index=index)
 
 
@@ -120,6 +121,7 @@ class Job:
     root: str
     width: int
     scenes: list[dict] | None = None  # given scene JSON, or None to sample the spec
+    include_dirs: tuple[str, ...] = ()  # --include: a worker compiling the spec again resolves the same imports
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
     def scene(self, index: int) -> dict:
@@ -127,7 +129,7 @@ class Job:
         if self.scenes is not None:
             return self.scenes[index]
         if self._sampler is None:
-            self._sampler = _spec_sampler(self.spec, self.seed)
+            self._sampler = _spec_sampler(self.spec, self.seed, self.include_dirs)
         return self._sampler(index)
 
     def __getstate__(self) -> dict:
@@ -312,10 +314,12 @@ def _progress(total: int):
                     console=Console(file=sys.stderr), transient=True)
 
 
-def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1) -> Path:
+def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
+                   include_dirs: Sequence[str] = ()) -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
-    For scene JSON input, `n` None or 0 means every scene in the file."""
+    For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
+    (--include) are searched for a spec's imports."""
     from backends import TARGETS
 
     unknown = [t for t in targets if t not in TARGETS]
@@ -344,12 +348,13 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         # reading it whole for the digest: the parser refuses a huge file after 1 MiB.)
         from prsc.sampling import compile_sampler
 
-        compiled = compile_sampler(str(file), include_dirs=())
+        compiled = compile_sampler(str(file), include_dirs=include_dirs)
         sampler = functools.partial(compiled.scene, seed)
         data = _read_input(path)
         sources = hashlib.sha256(data)
         for imported in compiled.program.source_files[1:]:
-            # The scenes also depend on every imported file: a change there makes them stale.
+            # The scenes also depend on every imported file (those found through --include
+            # too): a change there makes them stale.
             sources.update(_read_input(Path(imported)))
     width = max(DEFAULT_WIDTH, len(str(max(n - 1, 0))))
     root = Path(output) / path.stem
@@ -372,7 +377,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             if isinstance(scene, dict) and isinstance(scene.get("index"), int):
                 entries[scene["index"]] = {k: v for k, v in (scene.get("files") or {}).items() if (root / v).exists()}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
-              _sampler=sampler)
+              include_dirs=tuple(include_dirs), _sampler=sampler)
     todo = [k for k in range(n) if not all((root / job.relative(t, k)).exists() for t in targets)]
     pending = set(todo)
     for k in range(n):
@@ -439,5 +444,5 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
 def run(args: argparse.Namespace) -> int:
     """Entry point of `prsc compile`."""
     targets = list(dict.fromkeys(t.strip() for t in str(args.target).split(",") if t.strip()))
-    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, args.jobs)
+    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, args.jobs, args.include)
     return 0

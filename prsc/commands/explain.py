@@ -1,20 +1,25 @@
-"""`prsc explain FILE`: how prsc reads a spec.
+"""`prsc explain FILE --stage STAGE`: how prsc reads a spec, one compiler stage at a time.
 
+--stage syntax: the syntax tree of FILE alone (imports are not followed), one node per
+line with its line:col. --stage ir: the typed IR (names resolved, evaluation order).
 --stage constraints (default): the evaluation order, then per object its rows
 `a . p <= b` / `a . p = b` on its centre p, each with the specifier and source line that
 produced it, the region's dimension and length/area/volume, how it is cached, and the
 requires checked by rejection. Rows that depend on random values are shown as drawn in
-scene --index of --seed. --stage ir: the typed IR.
+scene --index of --seed. --stage scene: scene --index of --seed as scene JSON, indented
+(the same scene `prsc sample` writes on one line).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from typing import Any
 
 import numpy as np
 
+STAGES = ("syntax", "ir", "constraints", "scene")  # in compiler order
 _MEASURE = {0: "point", 1: "length", 2: "area", 3: "volume"}
 _UNITS = {0: "", 1: " m", 2: " m^2", 3: " m^3"}
 
@@ -22,12 +27,13 @@ _UNITS = {0: "", 1: " m", 2: " m^2", 3: " m^3"}
 def add_parser(subparsers: Any) -> None:
     """Register `prsc explain`."""
     parser = subparsers.add_parser(
-        "explain", help="show the constraint rows, regions and evaluation order of a spec", description=__doc__,
+        "explain", help="print a compiler stage of a spec: syntax tree, IR, constraint rows or a scene",
+        description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("file", metavar="FILE", help="a .prs spec")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
-    parser.add_argument("--stage", choices=("ir", "constraints"), default="constraints", help="what to print (default constraints)")
+    parser.add_argument("--stage", choices=STAGES, default="constraints", help="what to print (default constraints)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the scene whose random values are shown (default 0)")
     parser.add_argument("--index", type=int, default=0, help="index of that scene (default 0)")
 
@@ -135,6 +141,12 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Print the requested stage."""
+    if args.stage == "syntax":
+        from prsc.syntax import parse_file
+        from prsc.syntax.format import format_ast
+
+        sys.stdout.write(format_ast(parse_file(args.file)))
+        return 0
     if args.stage == "ir":
         from prsc.ir import compile_program, format_program
 
@@ -144,5 +156,8 @@ def run(args: argparse.Namespace) -> int:
     from prsc.sampling import compile_sampler
 
     sampler = compile_sampler(args.file, args.include)
+    if args.stage == "scene":
+        sys.stdout.write(json.dumps(sampler.scene(args.seed, args.index), indent=2, allow_nan=False) + "\n")
+        return 0
     sys.stdout.write(explain_constraints(sampler, args.seed, args.index))
     return 0

@@ -1,6 +1,6 @@
 """`prsc preview`: a contact sheet of sampled scenes, rendered offscreen with MuJoCo.
 
-    prsc preview FILE -n 16 -o sheet.png [--seed S]
+    prsc preview FILE -n 16 -o sheet.png [--seed S] [-I DIR]
 
 Each scene is compiled to MJCF in a temporary folder and rendered from the same oblique
 viewpoint framing the scene's objects, so the sheet shows the spread of the distribution
@@ -14,7 +14,7 @@ import math
 import os
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -32,15 +32,17 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("-n", "--scenes", type=int, default=16, help="number of scenes (default 16)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("-o", "--output", default="sheet.png", help="output image (default sheet.png)")
+    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
 
 
-def _scenes(file: str, n: int, seed: int) -> list[dict]:
+def _scenes(file: str, n: int, seed: int, include_dirs: Sequence[str] = ()) -> list[dict]:
+    """The first n scenes of a spec (sampled) or of scene JSON (read)."""
     from prsc.commands.compile import _read_scene_file, _spec_sampler
 
     path = Path(file)
     if path.suffix in (".json", ".jsonl"):
         return _read_scene_file(path)[:n]
-    sample = _spec_sampler(file, seed)
+    sample = _spec_sampler(file, seed, include_dirs)
     return [sample(k) for k in range(n)]
 
 
@@ -117,7 +119,7 @@ def contact_sheet(images: list[np.ndarray], labels: list[str], output: Path) -> 
     plt.close(figure)
 
 
-def preview(file: str, n: int, seed: int, output: str) -> Path:
+def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[str] = ()) -> Path:
     """Render `n` scenes of `file` into a contact sheet PNG at `output`."""
     if n < 1:
         raise PrscError(f"-n must be >= 1, got {n}")
@@ -125,7 +127,7 @@ def preview(file: str, n: int, seed: int, output: str) -> Path:
         raise PrscError(f"the contact sheet is a PNG: {output} should end in .png")
     out = output_file(output)
     os.environ.setdefault("MUJOCO_GL", "egl")
-    scenes = _scenes(file, n, seed)
+    scenes = _scenes(file, n, seed, include_dirs)
     with tempfile.TemporaryDirectory(prefix="prsc-preview-") as tmp:
         images = [render_scene(scene, Path(tmp)) for scene in scenes]
     labels = [f"scene {s.get('index', k)}" for k, s in enumerate(scenes)]
@@ -144,5 +146,5 @@ def preview(file: str, n: int, seed: int, output: str) -> Path:
 
 def run(args: argparse.Namespace) -> int:
     """Entry point of `prsc preview`."""
-    preview(args.file, args.scenes, args.seed, args.output)
+    preview(args.file, args.scenes, args.seed, args.output, args.include)
     return 0

@@ -7,6 +7,7 @@ import json
 import sys
 import time
 from pathlib import Path
+from typing import Sequence
 
 from prsc.errors import PrscError
 
@@ -30,16 +31,18 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K failures")
+    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
 
 
-def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int) -> list[tuple[dict, Path]]:
+def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int,
+             include_dirs: Sequence[str] = ()) -> list[tuple[dict, Path]]:
     """Compile the scenes exactly as `prsc compile --target json,mjcf` does; (scene, MJCF path) pairs."""
     from prsc.commands.compile import MANIFEST, compile_scenes
 
     is_json = source.suffix in (".json", ".jsonl")
     if count is None:
         count = 0 if is_json else 10  # 0: every scene of a JSON file
-    root = compile_scenes(str(source), ["json", "mjcf"], count, seed, str(out), jobs)
+    root = compile_scenes(str(source), ["json", "mjcf"], count, seed, str(out), jobs, include_dirs)
     manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
     pairs = []
     for entry in sorted(manifest["scenes"], key=lambda e: e["index"]):
@@ -50,7 +53,7 @@ def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int) -
     return pairs
 
 
-def _check_roles(source: Path, count: int | None, seed: int) -> None:
+def _check_roles(source: Path, count: int | None, seed: int, include_dirs: Sequence[str] = ()) -> None:
     """Refuse scenes that are not handover scenes before anything is compiled or written."""
     from backends.runner.roles import find_roles
     from prsc.commands.compile import _read_scene_file, _spec_sampler
@@ -59,7 +62,7 @@ def _check_roles(source: Path, count: int | None, seed: int) -> None:
         scenes = _read_scene_file(source)[:count]
     else:
         # Every scene of a spec has the same objects and classes: its first one tells.
-        scenes = [_spec_sampler(str(source), seed)(0)]
+        scenes = [_spec_sampler(str(source), seed, include_dirs)(0)]
     for scene in scenes:
         find_roles(scene)
 
@@ -77,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     if args.seed < 0:
         raise PrscError(f"--seed must be >= 0, got {args.seed}")
     source = Path(args.file)
-    _check_roles(source, args.n, args.seed)
+    _check_roles(source, args.n, args.seed, args.include)
     console = Console(stderr=True)
     from backends.runner.batch import EpisodeTask, choose_gl_backend, run_tasks
     from backends.runner.frames import record_episode, write_strip
@@ -88,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     out = args.output or Path("out") / f"run-{source.stem}"
     started = time.perf_counter()
     # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
-    pairs = _compile(source, args.n, args.seed, out, args.jobs)
+    pairs = _compile(source, args.n, args.seed, out, args.jobs, args.include)
     roles = [find_roles(scene) for scene, _ in pairs]  # a scene without the roles stops here
     tasks = [EpisodeTask(scene, str(mjcf), int(scene.get("seed", args.seed))) for scene, mjcf in pairs]
     compiled = time.perf_counter()

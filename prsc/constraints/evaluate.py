@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from operator import attrgetter
 from typing import Any, Callable
 
 import numpy as np
@@ -23,6 +24,8 @@ from prsc.ir import model as ir
 
 Fn = Callable[[SceneContext], Any]
 _MISSING = object()
+_DRAWS = attrgetter("draws")  # the context's memo of distribution values, by draw id
+_VARIABLES = attrgetter("variables")  # and of random global variables, by name
 
 # Unit offsets of face-point words in the object's local frame.
 _FACE_AXES = {
@@ -232,6 +235,21 @@ def relative_to(value: Any, frame: Any, span: Span | None) -> np.ndarray:
     raise _error(f"'relative to' needs an object or a vector on its right, got {describe(frame)}", span)
 
 
+def _once_per_scene(
+    fn: Fn, key: Any, memo: Callable[[SceneContext], dict], remember: Callable[[SceneContext, Any, Any], None]
+) -> Fn:
+    """fn evaluated at most once per scene: its value is kept in the context's `memo` by `remember`."""
+
+    def memoised(ctx: SceneContext) -> Any:
+        value = memo(ctx).get(key, _MISSING)
+        if value is _MISSING:
+            value = fn(ctx)
+            remember(ctx, key, value)
+        return value
+
+    return memoised
+
+
 def attribute(target: Any, prop: str, ctx: SceneContext | None, span: Span | None) -> Any:
     """`target.prop` on an object, a face point or a vector."""
     if isinstance(target, ObjectValue):
@@ -339,16 +357,8 @@ class ExprCompiler:
             if inner.const:
                 compiled = inner
             else:
-                fn = inner.fn
-
-                def variable(ctx: SceneContext) -> Any:
-                    value = ctx.variables.get(name, _MISSING)
-                    if value is _MISSING:
-                        value = fn(ctx)
-                        ctx.remember_variable(name, value)
-                    return value
-
-                compiled = Compiled(variable, False)
+                # A random variable is drawn once per scene, however many places read it.
+                compiled = Compiled(_once_per_scene(inner.fn, name, _VARIABLES, SceneContext.remember_variable), False)
             self._var_compiled[name] = compiled
         return compiled
 
@@ -452,16 +462,7 @@ class ExprCompiler:
         args = [self.compile(a) for a in e.args]
         weights = [self.compile(w) for w in e.weights]
         draw = _sampler_for(e, [a.fn for a in args], [w.fn for w in weights])
-        draw_id = e.draw_id
-
-        def distribution(ctx: SceneContext) -> Any:
-            value = ctx.draws.get(draw_id, _MISSING)
-            if value is _MISSING:
-                value = draw(ctx)
-                ctx.remember_draw(draw_id, value)
-            return value
-
-        return Compiled(distribution, False)
+        return Compiled(_once_per_scene(draw, e.draw_id, _DRAWS, SceneContext.remember_draw), False)
 
     def _c_RegionExpr(self, e: ir.RegionExpr) -> Compiled:
         names = [name for name, _ in e.args]

@@ -35,7 +35,7 @@ from prsc.constraints.model import (
 )
 from prsc.constraints.regions import rotation_of
 from prsc.constraints.requires import lower_condition, mentioned_objects
-from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
+from prsc.constraints.values import DIMENSIONS, ObjectValue, OrientedPoint, RegionValue, as_position, dimension, static_dims
 from prsc.errors import PrscError, Span
 from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import irreducible_infeasible_subset, is_feasible
@@ -44,7 +44,6 @@ from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.rotations import rotation_taking_y_to, yaw_matrix, yaw_toward
 from prsc.ir import model as ir
 
-_DIMENSIONS = ("width", "length", "height")
 
 
 @functools.lru_cache(maxsize=64)
@@ -281,6 +280,21 @@ def _specifier_rule(
     raise PrscError(f"unsupported position specifier {type(spec).__name__}", span)
 
 
+def _position_rule(
+    label: int,
+    build: Callable[[SceneContext, Support], Polytope],
+    probe_ctx: StaticContext,
+    probe_support: Support,
+    soft: int | None,
+) -> PositionRule:
+    """A PositionRule from `build`; a hard one whose rows are the same in every scene is built once now."""
+    if soft is None:
+        static, poly = _probe(lambda ctx: build(ctx, probe_support), probe_ctx)
+        if static:
+            return PositionRule(label, True, build, poly)
+    return PositionRule(label, False, build, None, soft)
+
+
 def _make_rule(
     label: int,
     args: list[Compiled],
@@ -289,17 +303,13 @@ def _make_rule(
     probe_support: Support,
     soft: int | None = None,
 ) -> PositionRule:
-    """A PositionRule, built once now if its rows are the same in every scene."""
+    """A PositionRule whose rows `make` builds from the values of `args` (and the support)."""
     fns = [a.fn for a in args]
 
     def build(ctx: SceneContext, support: Support) -> Polytope:
         return make([f(ctx) for f in fns], support)
 
-    if soft is None:
-        static, poly = _probe(lambda ctx: build(ctx, probe_support), probe_ctx)
-        if static:
-            return PositionRule(label, True, build, poly)
-    return PositionRule(label, False, build, None, soft)
+    return _position_rule(label, build, probe_ctx, probe_support, soft)
 
 
 def _require_rule(
@@ -317,11 +327,7 @@ def _require_rule(
         c = np.array(eq_a, dtype=float).reshape(-1, 3)
         return Polytope(a, np.array(le_b, dtype=float), c, np.array(eq_b, dtype=float), np.full(len(a), label), np.full(len(c), label))
 
-    if soft is None:
-        static, poly = _probe(lambda ctx: build(ctx, probe_support), probe_ctx)
-        if static:
-            return PositionRule(label, True, build, poly)
-    return PositionRule(label, False, build, None, soft)
+    return _position_rule(label, build, probe_ctx, probe_support, soft)
 
 
 # ---------------------------------------------------------------- errors
@@ -395,18 +401,16 @@ def _lower_object(
         property_fns[prop] = compiled.fn
         if compiled.const:
             facts.props[name][prop] = compiled.value
-    for dim in _DIMENSIONS:
+    for dim in DIMENSIONS:
         if dim not in property_fns:
             property_fns[dim] = lambda ctx: 1.0
             facts.props[name][dim] = 1.0
     static_props = dict(facts.props[name])
-    for dim in _DIMENSIONS:
-        value = static_props.get(dim)
-        if dim in static_props and (isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0):
+    for dim in DIMENSIONS:
+        if dim in static_props:
             expr = obj.prop(dim)
-            raise PrscError(f"{dim} of {name} must be a number >= 0, got {value!r}", expr.span if expr is not None else obj.span)
-    dims_static = all(d in static_props for d in _DIMENSIONS)
-    dims = tuple(float(static_props[d]) for d in _DIMENSIONS) if dims_static else None
+            dimension(static_props[dim], dim, name, expr.span if expr is not None else obj.span)
+    dims = static_dims(static_props)
 
     orientation = _orientation_rule(low, obj)
     rotation: np.ndarray | None = np.eye(3) if orientation is None else None
@@ -518,9 +522,9 @@ def _find_anchor(
         if xname in low.facts.positions or xname not in low.facts.rotations:
             continue
         props = low.facts.props.get(xname, {})
-        if not all(d in props for d in _DIMENSIONS):
+        dims = static_dims(props)
+        if dims is None:
             continue
-        dims = tuple(float(props[d]) for d in _DIMENSIONS)
 
         def rows_at_shift(shift: np.ndarray) -> Polytope | None:
             stand_in = ObjectValue(xname, x.class_name, x.span, shift, low.facts.rotations[xname], dims, dict(props))

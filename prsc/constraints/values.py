@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 
 Vector = NDArray[np.float64]
 
+DIMENSIONS = ("width", "length", "height")  # the properties that size an object's box
+
 # Marks a property whose evaluation is under way (a `self.a` / `self.b` cycle).
 _IN_PROGRESS = object()
 
@@ -112,3 +114,17 @@ def as_position(value: Any) -> Vector | None:
     if isinstance(value, ObjectValue):
         return value.position
     return None
+
+
+def dimension(value: Any, prop: str, obj_name: str, span: Span | None) -> float:
+    """An object's width, length or height as a float; a PrscError unless it is a number >= 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
+        raise PrscError(f"{prop} of {obj_name} must be a number >= 0, got {value!r}", span)
+    return float(value)
+
+
+def static_dims(props: dict[str, Any]) -> tuple[float, float, float] | None:
+    """(width, length, height) from properties known at compile time; None unless all three are."""
+    if not all(d in props for d in DIMENSIONS):
+        return None
+    return (float(props["width"]), float(props["length"]), float(props["height"]))

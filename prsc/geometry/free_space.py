@@ -17,7 +17,7 @@ from exact contact positions): the caller reports a dead end instead of retrying
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,6 +31,7 @@ from prsc.geometry.triangulation import BOUND, VERTEX_TOL, decompose, order_poly
 _FLAT_ROW = 1e-9
 # A convex polygon as its vertices in counter-clockwise order (reduced coordinates).
 Polygon = list[tuple[float, float]]
+_P = TypeVar("_P")  # a piece: a (polygon, area) pair in 2D, a _Piece otherwise
 
 
 @dataclass(frozen=True, eq=False)
@@ -202,19 +203,33 @@ def _reduced_obstacle(reg: AffineRegion, obs: Polytope) -> NDArray[np.float64] |
     return np.hstack([at[keep] / norms[keep, None], (bt[keep] / norms[keep])[:, None]])
 
 
-def _free_polygons(reg: AffineRegion, first: _Piece, obstacles: Sequence[Polytope], tol: float) -> FreeSpace:
-    """The 2D case: polygons clipped in vertex form (CCW order), in plain floats."""
-    start: Polygon = [(x, y) for x, y in order_polygon(first.vertices).tolist()]
-    polys = [(start, _area(start))]
+def _subtract_obstacles(
+    reg: AffineRegion,
+    obstacles: Sequence[Polytope],
+    pieces: list[_P],
+    cut: Callable[[list[_P], NDArray[np.float64]], list[_P]],
+) -> list[_P]:
+    """pieces minus every obstacle; `cut(pieces, rows)` subtracts one obstacle's reduced rows."""
     for obs in obstacles:
         rows = _reduced_obstacle(reg, obs)
         if rows is None:
-            continue
+            continue  # the obstacle misses the region
         if rows.shape[0] == 0:
-            return FreeSpace(reg, ())
-        polys = _subtract_polygons(polys, [(r[0], r[1], r[2]) for r in rows.tolist()], tol)
-        if not polys:
+            return []  # the obstacle contains the whole region
+        pieces = cut(pieces, rows)
+        if not pieces:
             break
+    return pieces
+
+
+def _free_polygons(reg: AffineRegion, first: _Piece, obstacles: Sequence[Polytope], tol: float) -> FreeSpace:
+    """The 2D case: polygons clipped in vertex form (CCW order), in plain floats."""
+    start: Polygon = [(x, y) for x, y in order_polygon(first.vertices).tolist()]
+
+    def cut(polys: list[tuple[Polygon, float]], rows: NDArray[np.float64]) -> list[tuple[Polygon, float]]:
+        return _subtract_polygons(polys, [(r[0], r[1], r[2]) for r in rows.tolist()], tol)
+
+    polys = _subtract_obstacles(reg, obstacles, [(start, _area(start))], cut)
     return FreeSpace(reg, tuple(_polygon_piece(p, area) for p, area in polys))
 
 
@@ -244,21 +259,12 @@ def free_space(
         raise EmptyRegionError("the region has measure zero")
     if reg.dim == 2:
         return _free_polygons(reg, first, obstacles, tol)
-    pieces = [first]
-    for obs in obstacles:
-        rows = _reduced_obstacle(reg, obs)
-        if rows is None:
-            continue
-        if rows.shape[0] == 0:
-            return FreeSpace(reg, ())
+
+    def cut(pieces: list[_Piece], rows: NDArray[np.float64]) -> list[_Piece]:
         at, bt = rows[:, :-1], rows[:, -1]
-        nxt: list[_Piece] = []
-        for piece in pieces:
-            nxt.extend(_subtract(piece, at, bt, bound, tol))
-        pieces = nxt
-        if not pieces:
-            break
-    return FreeSpace(reg, tuple(pieces))
+        return [sub for piece in pieces for sub in _subtract(piece, at, bt, bound, tol)]
+
+    return FreeSpace(reg, tuple(_subtract_obstacles(reg, obstacles, [first], cut)))
 
 
 def free_space_sampler(

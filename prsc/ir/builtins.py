@@ -71,6 +71,9 @@ CONSTRUCTORS = DISTRIBUTIONS + REGIONS + VECTORS
 
 FACE_WORD_GROUPS = (("top", "bottom"), ("front", "back"), ("left", "right"))
 DIRECTIONS = ("left", "right", "ahead", "behind", "above", "below")
+# How a direction specifier is written before its reference (`left of X`, `behind X`).
+DIRECTION_PHRASES = {"left": "left of", "right": "right of", "ahead": "ahead of",
+                     "behind": "behind", "above": "above", "below": "below"}
 AXES = ("x", "y", "z")
 
 # Python modules a spec might try to import: named in the error instead of "not found".

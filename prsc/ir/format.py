@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from prsc.ir import model as ir
+from prsc.ir.builtins import DIRECTION_PHRASES
 
 _PRECEDENCE = {"or": 1, "and": 2, "not": 3, "compare": 4, "relative": 5, "+": 6, "-": 6, "*": 7, "/": 7,
                "unary": 8}
@@ -110,7 +111,7 @@ def format_specifier(spec: ir.Specifier) -> str:
     if isinstance(spec, ir.On):
         return f"{'completely ' if spec.completely else ''}on {_arg(spec.target)}"
     if isinstance(spec, ir.Direction):
-        word = {"left": "left of", "right": "right of", "ahead": "ahead of"}.get(spec.relation, spec.relation)
+        word = DIRECTION_PHRASES.get(spec.relation, spec.relation)
         by = f" by {_arg(spec.by)}" if spec.by is not None else ""
         return f"{word} {_arg(spec.target)}{by}"
     if isinstance(spec, ir.Beyond):

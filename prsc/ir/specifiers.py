@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from prsc.errors import PrscError
 from prsc.ir import model as ir
-from prsc.ir.builtins import AXES, BOX_READS
+from prsc.ir.builtins import AXES, BOX_READS, DIRECTION_PHRASES
 from prsc.ir.expressions import LOCATED_TYPES, POINT_TYPES, ExprResolver, article, expect, type_words
 from prsc.ir.scope import ClassInfo, VariableInfo, did_you_mean
 from prsc.syntax import nodes
@@ -54,7 +54,7 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
                                 f"not a {kind} region; use `in` for a solid region", target.span)
         return ir.On(span, POSITION, BOX_READS, target, spec.completely)
     if isinstance(spec, nodes.DirectionSpec):
-        word = {"left": "left of", "right": "right of", "ahead": "ahead of"}.get(spec.relation, spec.relation)
+        word = DIRECTION_PHRASES.get(spec.relation, spec.relation)
         target = expect(r(spec.target), LOCATED_TYPES, f"the reference of `{word}`")
         by = expect(r(spec.by), {T.SCALAR}, f"the gap after `{word} ... by`") if spec.by is not None else None
         return ir.Direction(span, POSITION, BOX_READS, spec.relation, target, by)

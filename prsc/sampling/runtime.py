@@ -9,12 +9,9 @@ import numpy as np
 
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import ConstraintProgram, ObjectPlan, Support
-from prsc.constraints.values import ObjectValue
-from prsc.errors import PrscError
+from prsc.constraints.values import DIMENSIONS, ObjectValue, dimension, static_dims
 from prsc.sampling.collisions import PlacedBox, aabb_reach
 from prsc.sampling.regions import RegionProvider
-
-_DIMENSIONS = ("width", "length", "height")
 
 
 @dataclass(eq=False)
@@ -37,7 +34,7 @@ class ObjectRuntime:
     def build(cls, plan: ObjectPlan) -> ObjectRuntime:
         """Digest a plan."""
         props = plan.static_props
-        dims = tuple(float(props[d]) for d in _DIMENSIONS) if all(d in props for d in _DIMENSIONS) else None
+        dims = static_dims(props)
         half = None if dims is None else np.array(dims) * 0.5
         orient = plan.orientation
         after = orient is not None and orient.after_position
@@ -75,7 +72,7 @@ class ObjectRuntime:
         ctx.objects[plan.name] = obj
         half = self.half
         if half is None:
-            dims = tuple(_dimension(obj, d, ctx) for d in _DIMENSIONS)
+            dims = tuple(dimension(obj.get(d, ctx, obj.span), d, obj.name, obj.span) for d in DIMENSIONS)
             obj.dims = dims  # type: ignore[assignment]
             half = np.array(dims) * 0.5
         if self.rotation is not None:
@@ -114,13 +111,6 @@ class ObjectRuntime:
         ):
             self.static_box = box
         return box
-
-
-def _dimension(obj: ObjectValue, name: str, ctx: SceneContext) -> float:
-    value = obj.get(name, ctx, obj.span)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
-        raise PrscError(f"{name} of {obj.name} must be a number >= 0, got {value!r}", obj.span)
-    return float(value)
 
 
 def build_runtimes(cprog: ConstraintProgram) -> list[ObjectRuntime]:
