@@ -38,8 +38,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=1.0, help="simulated time (default 1 s)")
     args = parser.parse_args(argv)
     model, before, after = settle(args.mjcf, args.seconds)
-    table = Table(title=f"{args.mjcf}: {model.nbody - 1} bodies, {model.njnt} joints, "
-                        f"{model.nu} actuators, {model.ncam} cameras; {args.seconds:g} s simulated")
+    console = Console()
+    console.print(f"{args.mjcf}: loaded in MuJoCo, {model.nbody - 1} bodies, {model.njnt} joints, "
+                  f"{model.nu} actuators, {model.ncam} cameras; {args.seconds:g} s simulated")
+    table = Table()
     for column in ("body", "free", "position (m)", "moved (mm)"):
         table.add_column(column, justify="right" if column == "moved (mm)" else "left")
     for body in range(1, model.nbody):
@@ -50,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
         moved = 1000.0 * float(np.linalg.norm(after[body] - before[body]))
         position = ", ".join(f"{v:+.3f}" for v in before[body])
         table.add_row(model.body(body).name, "yes" if free else "fixed", position, f"{moved:.1f}")
-    Console().print(table)
+    console.print(table)
     return 0
 
 
