@@ -29,10 +29,11 @@ demo: $(STAMP)
 	$(PRSC) preview specs/table_cube.prs -n 8 --seed 0 -o out/demo/table_cube_sheet.png
 	@echo "scenes: out/demo/table_cube/mjcf/*.xml   contact sheet: out/demo/table_cube_sheet.png"
 
-# Every spec in specs/ into every format.
+# Every spec in specs/ into every format (tabletop.prs is the model library: no objects).
 DATASET_SCENES ?= 100
+DATASET_SPECS := $(filter-out specs/tabletop.prs,$(wildcard specs/*.prs))
 datasets: $(STAMP)
-	@for spec in specs/*.prs; do echo "== $$spec"; \
+	@for spec in $(DATASET_SPECS); do echo "== $$spec"; \
 	  $(PRSC) compile $$spec --target json,mjcf,urdf,sdf,usd -n $(DATASET_SCENES) --seed 0 -o out/datasets --jobs 2 || exit 1; done
 
 # Samplers side by side (the paper's Table II), then files written per second per format.
