@@ -156,7 +156,9 @@ def urdf_validate(folder: Path) -> None:
     """yourdfpy validates every URDF of a bundle and every mesh it names exists."""
     import yourdfpy
 
-    for path in sorted(folder.glob("*.urdf")):
+    paths = sorted(folder.glob("*.urdf"))
+    assert paths, f"no URDF in {folder}"
+    for path in paths:
         robot = yourdfpy.URDF.load(str(path), load_meshes=False, build_scene_graph=True)
         assert robot.validate(), f"yourdfpy rejects {path.name}: {robot.errors}"
         for mesh in ET.parse(path).getroot().iter("mesh"):
