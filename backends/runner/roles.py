@@ -31,11 +31,18 @@ def footprint_distance(box: dict, point) -> float:
 
 
 def find_roles(scene: dict) -> Roles:
-    """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera."""
+    """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera.
+
+    An object fills a role when its class or one of its ancestors (the scene's `classes`
+    map, e.g. `RedCube(Cube)`) is the role's class.
+    """
+    wanted = {"Robot": 2, "Tray": 2, "Cube": 1, "Camera": 1}
+    ancestry = scene.get("classes") or {}
     by_class: dict[str, list[dict]] = {}
     for obj in scene.get("objects", []):
-        by_class.setdefault(obj.get("class"), []).append(obj)
-    wanted = {"Robot": 2, "Tray": 2, "Cube": 1, "Camera": 1}
+        lineage = [obj.get("class"), *ancestry.get(obj.get("class"), [])]
+        role = next((cls for cls in lineage if cls in wanted), obj.get("class"))
+        by_class.setdefault(role, []).append(obj)
     problems = []
     for cls, count in wanted.items():
         found = len(by_class.get(cls, []))

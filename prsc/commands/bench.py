@@ -45,7 +45,6 @@ def add_parser(subparsers: Any) -> None:
 def measure(path: str, include: list[str], sampler_name: str, n: int, seconds: float, seed: int, walk_length: int) -> dict[str, Any]:
     """Sample up to n scenes (or `seconds` of CPU time) and report rates, rejections and memory."""
     from prsc.sampling import compile_sampler
-    from prsc.sampling.scene_json import scene_json
     from prsc.sampling.stats import RejectionStats
 
     sampler = compile_sampler(path, include, sampler_name, walk_length=walk_length)
@@ -56,7 +55,7 @@ def measure(path: str, include: list[str], sampler_name: str, n: int, seconds: f
     done = 0
     for index in range(n):
         result = sampler.sample(seed, index)
-        scene_json(sampler.spec, seed, index, result.params, result.objects, sampler.templates)
+        sampler.to_json(result, seed, index)
         stats.merge(result.stats)
         done += 1
         if time.process_time() - cpu0 > seconds:

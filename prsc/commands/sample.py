@@ -39,7 +39,6 @@ def add_parser(subparsers: Any) -> None:
 
 def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> Any:
     """Write n scenes as JSON lines; returns the merged rejection statistics."""
-    from prsc.sampling.scene_json import scene_json
     from prsc.sampling.stats import RejectionStats
 
     total = RejectionStats()
@@ -47,7 +46,7 @@ def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> A
     for index in range(start, start + n):
         result = sampler.sample(seed, index)
         total.merge(result.stats)
-        scene = scene_json(sampler.spec, seed, index, result.params, result.objects, sampler.templates)
+        scene = sampler.to_json(result, seed, index)
         out.write(dumps(scene))
         out.write("\n")
     return total

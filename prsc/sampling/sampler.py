@@ -53,6 +53,7 @@ class Sampler:
             object_template(plan.name, plan.class_name, plan.static_props, plan.span) if set(plan.property_fns) <= set(plan.static_props) else None
             for plan in self.constraints.objects
         ]
+        self.classes: dict[str, list[str]] = {o.class_name: list(o.class_chain[1:]) for o in program.objects}
         if sampler == "rejection":
             self._engine = RejectionSampler(self.constraints, max_attempts)
         else:
@@ -64,8 +65,11 @@ class Sampler:
 
     def scene(self, seed: int, index: int) -> dict[str, Any]:
         """Scene `index` under `seed` as scene JSON (docs/scene-json.md)."""
-        result = self._engine.sample(seed, index)
-        return scene_json(self.spec, int(seed), int(index), result.params, result.objects, self.templates)
+        return self.to_json(self._engine.sample(seed, index), seed, index)
+
+    def to_json(self, result: SceneResult, seed: int, index: int) -> dict[str, Any]:
+        """The scene JSON of a sampled scene (for callers that also keep its statistics)."""
+        return scene_json(self.spec, int(seed), int(index), result.params, result.objects, self.templates, self.classes)
 
     def scenes(self, seed: int, n: int, start: int = 0) -> Iterator[dict[str, Any]]:
         """Scenes start .. start+n-1 under `seed`, lazily."""

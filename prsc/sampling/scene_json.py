@@ -214,8 +214,10 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
 def scene_json(
     spec: str, seed: int, index: int, params: dict[str, Any], objects: list[ObjectValue],
     templates: list[dict[str, Any] | None] | None = None,
+    classes: dict[str, list[str]] | None = None,
 ) -> dict[str, Any]:
-    """The whole scene as a JSON-ready dict (templates: per-object output of `object_template`)."""
+    """The whole scene as a JSON-ready dict (templates: per-object output of `object_template`;
+    classes: each object class's ancestors, most derived first)."""
     out_params = {"ground": True}
     out_params.update({k: json_value(v) for k, v in params.items()})
     if templates is None:
@@ -230,6 +232,8 @@ def scene_json(
         "index": index,
         "params": out_params,
         "objects": out_objects,
+        # Consumers that look objects up by class (the runner's roles) also accept subclasses.
+        "classes": classes if classes is not None else {},
     }
 
 

@@ -40,3 +40,12 @@ def test_non_panda_robot_is_refused(table_cube):
     table_cube["objects"][1]["model"] = "ur5"
     with pytest.raises(PrscError, match="Pandas only"):
         find_roles(table_cube)
+
+
+def test_subclasses_fill_roles_through_the_scene_class_map(table_cube):
+    cube = next(o for o in table_cube["objects"] if o["class"] == "Cube")
+    cube["class"] = "RedCube"
+    with pytest.raises(PrscError, match=r"1 Cube \(found 0\)"):
+        find_roles(table_cube)
+    table_cube["classes"] = {"RedCube": ["Cube", "Object"], "Tray": ["Object"]}
+    assert find_roles(table_cube).cube["name"] == cube["name"]

@@ -91,3 +91,17 @@ def test_bad_property_values_are_errors_at_the_object(tmp_path, props, message, 
         compile_sampler(str(spec)).scene(0, 0)
     assert message in info.value.message
     assert (info.value.span.path, info.value.span.line, info.value.span.column) == (str(spec), 2, 1)
+
+
+def test_scene_lists_every_object_class_with_its_ancestors(tmp_path):
+    spec = tmp_path / "sub.prs"
+    spec.write_text(
+        "from tabletop import *\n"
+        "class RedCube(Cube):\n"
+        "    color: 'red'\n"
+        "table = Table on Vector3D(0, 0, 0)\n"
+        "c = RedCube completely on table\n"
+    )
+    scene = compile_sampler(str(spec)).scene(0, 0)
+    assert scene["classes"] == {"Table": ["Object"], "RedCube": ["Cube", "Object"]}
+    assert [o["class"] for o in scene["objects"]] == ["Table", "RedCube"]
