@@ -25,7 +25,7 @@ test: $(STAMP)
 demo: $(STAMP)
 	$(PRSC) check specs/table_cube.prs
 	$(PRSC) compile specs/table_cube.prs --target mjcf -n 8 --seed 0 -o out/demo
-	$(PY) -m backends.settle_report out/demo/table_cube/mjcf/00000.xml
+	$(PY) -m prsc.backends.settle_report out/demo/table_cube/mjcf/00000.xml
 	$(PRSC) preview specs/table_cube.prs -n 8 --seed 0 -o out/demo/table_cube_sheet.png
 	@echo "scenes: out/demo/table_cube/mjcf/*.xml   contact sheet: out/demo/table_cube_sheet.png"
 
@@ -39,7 +39,7 @@ datasets: $(STAMP)
 # Samplers side by side (the paper's Table II), then files written per second per format.
 bench: $(STAMP)
 	$(PRSC) bench ../shared/specs/original/tableCube.prs ../shared/specs/original/tableCubeNaive.prs specs/table_cube.prs
-	$(PY) -m backends.bench --spec specs/table_cube.prs -n 1000 --jobs 1,2
+	$(PY) -m prsc.backends.bench --spec specs/table_cube.prs -n 1000 --jobs 1,2
 
 # The paper's section IV case study: 100 Table-Cube episodes, table + plots in out/casestudy.
 CASESTUDY := $(PRSC) run specs/table_cube.prs -n 100 --seed 0 --jobs 2

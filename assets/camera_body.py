@@ -6,7 +6,7 @@ plane and never appears in the camera's own view. It never collides (a camera is
 
 from __future__ import annotations
 
-from assets.parts import Part, box
+from prsc.assets.parts import Part, box
 
 
 def camera_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:

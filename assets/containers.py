@@ -8,7 +8,7 @@ floor. Thicknesses (the MuJoCo runner reads them here): a tray of the standard 0
 
 from __future__ import annotations
 
-from assets.parts import Part, box
+from prsc.assets.parts import Part, box
 
 
 def _clamp(value: float, low: float, high: float) -> float:

@@ -1,6 +1,6 @@
 """Asset registry: model name -> recipe fitting the asset to an object's box.
 
-Part assets are lists of primitives (assets.parts.Part) in the object's box frame;
+Part assets are lists of primitives (prsc.assets.parts.Part) in the object's box frame;
 robot assets (the Panda) are articulated models that each backend mounts at the bottom
 centre of the object's box. Names are matched case- and separator-insensitively, so the
 original ProbRobScene `model_name "DiningChair"` finds `diningchair` (alias `chair`).
@@ -11,13 +11,13 @@ from __future__ import annotations
 import re
 from typing import Callable
 
-from assets.camera_body import camera_parts
-from assets.containers import bin_parts, box_parts, tray_parts
-from assets.furniture import chair_parts, shelf_parts
-from assets.parts import Part
-from assets.solids import bottle_parts, cube_parts, cylinder_parts
-from assets.table import table_parts
-from assets.vessel import bowl_parts, bucket_parts, cup_parts, plate_parts
+from prsc.assets.camera_body import camera_parts
+from prsc.assets.containers import bin_parts, box_parts, tray_parts
+from prsc.assets.furniture import chair_parts, shelf_parts
+from prsc.assets.parts import Part
+from prsc.assets.solids import bottle_parts, cube_parts, cylinder_parts
+from prsc.assets.table import table_parts
+from prsc.assets.vessel import bowl_parts, bucket_parts, cup_parts, plate_parts
 
 Recipe = Callable[[tuple[float, float, float]], tuple[Part, ...]]
 

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from assets.urdf_tree import Joint, RobotTree, read_urdf
+from prsc.assets.urdf_tree import Joint, RobotTree, read_urdf
 from prsc.geometry.rotations import matrix_to_quat
 
 RECIPE_VERSION = "1"
@@ -36,7 +36,7 @@ _LINEAR_DAMPING = 20.0  # N s / m
 def robot_home(robot: str) -> dict[str, float]:
     """Joint positions of the robot's home posture, by URDF joint name."""
     if robot == "panda":
-        from assets.panda import ARM_JOINTS, FINGER_JOINTS, GRIPPER_OPEN, HOME_QPOS
+        from prsc.assets.panda import ARM_JOINTS, FINGER_JOINTS, GRIPPER_OPEN, HOME_QPOS
 
         home = dict(zip(ARM_JOINTS, HOME_QPOS))
         home.update({name: GRIPPER_OPEN for name in FINGER_JOINTS})
@@ -45,7 +45,7 @@ def robot_home(robot: str) -> dict[str, float]:
 
 
 def _build_dir() -> Path:
-    from assets.panda import build_dir
+    from prsc.assets.panda import build_dir
 
     return build_dir()
 

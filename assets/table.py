@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from assets.parts import Part, box
+from prsc.assets.parts import Part, box
 
 
 def table_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:

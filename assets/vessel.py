@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 
-from assets.parts import Part, box, cylinder
+from prsc.assets.parts import Part, box, cylinder
 
 SEGMENTS = 16
 

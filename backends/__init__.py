@@ -1,8 +1,8 @@
 """Backends: one emitter per output format, each a function from the scene JSON to files.
 
 Every backend module exposes `render(scene, path, store)`: `scene` a validated
-`backends.scene.Scene`, `path` where the output will live (relative paths inside it are
-computed from there), `store` the `backends.store.AssetStore` of shared meshes and robot
+`prsc.backends.scene.Scene`, `path` where the output will live (relative paths inside it are
+computed from there), `store` the `prsc.backends.store.AssetStore` of shared meshes and robot
 assets. It returns the file's bytes, or for a bundle a dict of relative name -> bytes.
 """
 
@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from backends.scene import Scene, parse_scene
-from backends.store import AssetStore
+from prsc.backends.scene import Scene, parse_scene
+from prsc.backends.store import AssetStore
 
 
 @dataclass(frozen=True)
@@ -36,11 +36,11 @@ class Target:
 
 
 TARGETS: dict[str, Target] = {
-    "json": Target("json", "backends.json", ".json"),
-    "mjcf": Target("mjcf", "backends.mjcf", ".xml"),
-    "urdf": Target("urdf", "backends.urdf", "", bundle=True),
-    "sdf": Target("sdf", "backends.sdf", ".sdf"),
-    "usd": Target("usd", "backends.usd", ".usda"),
+    "json": Target("json", "prsc.backends.json", ".json"),
+    "mjcf": Target("mjcf", "prsc.backends.mjcf", ".xml"),
+    "urdf": Target("urdf", "prsc.backends.urdf", "", bundle=True),
+    "sdf": Target("sdf", "prsc.backends.sdf", ".sdf"),
+    "usd": Target("usd", "prsc.backends.usd", ".usda"),
 }
 """Every output format, by the name `prsc compile --target` takes."""
 

@@ -1,6 +1,6 @@
 """Benchmark of the backends: files written per second per format (`make bench`).
 
-    python -m backends.bench [--spec specs/table_cube.prs] [-n 1000] [--jobs 1,2]
+    python -m prsc.backends.bench [--spec specs/table_cube.prs] [-n 1000] [--jobs 1,2]
 
 Each run is `prsc compile` end to end (sampling, rendering, atomic writes, manifest) into a
 fresh temporary folder; the asset store (Panda meshes) is warmed first so runs measure
@@ -17,7 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from backends import TARGETS
+from prsc.backends import TARGETS
 
 
 def _cpu_seconds() -> float:
@@ -59,7 +59,7 @@ def bench(spec: str, n: int, jobs: list[int], targets: list[str]) -> list[dict]:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark and print a table."""
-    parser = argparse.ArgumentParser(prog="python -m backends.bench", description=__doc__,
+    parser = argparse.ArgumentParser(prog="python -m prsc.backends.bench", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--spec", default="specs/table_cube.prs")
     parser.add_argument("-n", type=int, default=1000)

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from assets.parts import Part, box, cylinder, sphere
-from assets.registry import is_robot, part_recipe
-from backends.inertia import Inertial, composite_inertial
-from backends.scene import CameraSpec, Scene, SceneObject
-from backends.store import AssetStore
+from prsc.assets.parts import Part, box, cylinder, sphere
+from prsc.assets.registry import is_robot, part_recipe
+from prsc.backends.inertia import Inertial, composite_inertial
+from prsc.backends.scene import CameraSpec, Scene, SceneObject
+from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
 
 CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 
-from backends.bodies import CAMERA_QUAT_POS_X
-from backends.numbers import num, nums
-from backends.scene import CameraSpec
+from prsc.backends.bodies import CAMERA_QUAT_POS_X
+from prsc.backends.numbers import num, nums
+from prsc.backends.scene import CameraSpec
 from prsc.geometry.rotations import quat_to_rpy
 
 NEAR_CLIP = "0.01"  # metres

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from assets.parts import Part
+from prsc.assets.parts import Part
 from prsc.geometry.rotations import matrix_to_quat, quat_to_matrix
 
 

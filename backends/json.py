@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from backends.scene import Scene
-from backends.store import AssetStore
+from prsc.backends.scene import Scene
+from prsc.backends.store import AssetStore
 
 
 def render(scene: Scene, path: Path, store: AssetStore) -> bytes:

@@ -23,11 +23,11 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
-from backends.numbers import num, nums
-from backends.scene import Scene
-from backends.store import AssetStore, relative_path
-from backends.xmltext import element_text, placeholder, serialise
+from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
+from prsc.backends.numbers import num, nums
+from prsc.backends.scene import Scene
+from prsc.backends.store import AssetStore, relative_path
+from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 
 TIMESTEP = 0.002
@@ -67,7 +67,7 @@ def _robot_fragment_xml(robot: str, prefix: str) -> tuple[str, tuple[float, ...]
     qpos and ctrl (built once per process)."""
     import mujoco
 
-    from assets.panda import GRIPPER_OPEN, HOME_QPOS, panda_mjcf_spec
+    from prsc.assets.panda import GRIPPER_OPEN, HOME_QPOS, panda_mjcf_spec
 
     if robot != "panda":
         raise ValueError(f"no MJCF for robot {robot!r}")

@@ -20,16 +20,16 @@ from pathlib import Path
 
 import numpy as np
 
-from assets.urdf_tree import Geometry, RobotTree, read_urdf
-from backends.bodies import Body, resolve_bodies
-from backends.gazebo_camera import camera_sensor_body
-from backends.inertia import Inertial
-from backends.mjcf import FRICTION
-from backends.numbers import num, nums
-from backends.scene import Scene
-from backends.store import AssetStore, relative_path, robot_urdf_source
-from backends.urdf import robot_base_yaw
-from backends.xmltext import element_text, placeholder, serialise
+from prsc.assets.urdf_tree import Geometry, RobotTree, read_urdf
+from prsc.backends.bodies import Body, resolve_bodies
+from prsc.backends.gazebo_camera import camera_sensor_body
+from prsc.backends.inertia import Inertial
+from prsc.backends.mjcf import FRICTION
+from prsc.backends.numbers import num, nums
+from prsc.backends.scene import Scene
+from prsc.backends.store import AssetStore, relative_path, robot_urdf_source
+from prsc.backends.urdf import robot_base_yaw
+from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 from prsc.geometry.rotations import matrix_to_rpy, quat_to_rpy, rot_z
 

@@ -1,6 +1,6 @@
 """Load an MJCF scene in MuJoCo, simulate it, and print where every body ended up.
 
-`python -m backends.settle_report FILE.xml [--seconds S]`: the check a user runs on a
+`python -m prsc.backends.settle_report FILE.xml [--seconds S]`: the check a user runs on a
 compiled scene (and `make demo` shows): the file loads from any working directory, each
 free body's displacement after S simulated seconds tells whether it rests where the
 sampler put it.
@@ -33,7 +33,7 @@ def settle(path: Path, seconds: float) -> tuple[mujoco.MjModel, np.ndarray, np.n
 
 def main(argv: list[str] | None = None) -> int:
     """Print a table of the top-level bodies of an MJCF scene and how far each moved."""
-    parser = argparse.ArgumentParser(prog="python -m backends.settle_report", description=__doc__)
+    parser = argparse.ArgumentParser(prog="python -m prsc.backends.settle_report", description=__doc__)
     parser.add_argument("mjcf", type=Path)
     parser.add_argument("--seconds", type=float, default=1.0, help="simulated time (default 1 s)")
     args = parser.parse_args(argv)

@@ -12,7 +12,7 @@ import os
 from functools import lru_cache
 from pathlib import Path
 
-from backends.files import atomic_copy, atomic_write
+from prsc.backends.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
 
 
@@ -29,7 +29,7 @@ def _sha12(data: bytes) -> str:
 def _robot_source(robot: str) -> tuple[str, str]:
     """(URDF path, MJCF path) of a robot model, built by its asset recipe."""
     if robot == "panda":
-        from assets.panda import panda_mjcf_path, panda_urdf_path
+        from prsc.assets.panda import panda_mjcf_path, panda_urdf_path
 
         return str(panda_urdf_path()), str(panda_mjcf_path())
     raise PrscError(f"no asset recipe for robot model {robot!r}")
@@ -99,7 +99,7 @@ class AssetStore:
 
 @lru_cache(maxsize=8)
 def _robot_usd_source(robot: str) -> Path:
-    from assets.robot_usd import robot_usd_cached
+    from prsc.assets.robot_usd import robot_usd_cached
 
     return robot_usd_cached(robot, robot_urdf_source(robot))
 

@@ -19,13 +19,13 @@ import xml.etree.ElementTree as ET
 from functools import lru_cache
 from pathlib import Path
 
-from backends.bodies import Body, resolve_bodies
-from backends.gazebo_camera import camera_sensor_body
-from backends.inertia import Inertial
-from backends.numbers import num, nums
-from backends.scene import Scene
-from backends.store import AssetStore, relative_path, robot_urdf_source
-from backends.xmltext import element_text, placeholder, serialise
+from prsc.backends.bodies import Body, resolve_bodies
+from prsc.backends.gazebo_camera import camera_sensor_body
+from prsc.backends.inertia import Inertial
+from prsc.backends.numbers import num, nums
+from prsc.backends.scene import Scene
+from prsc.backends.store import AssetStore, relative_path, robot_urdf_source
+from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 from prsc.geometry.rotations import quat_to_rpy
 
@@ -110,7 +110,7 @@ def _robot_body_text(robot: str, store_root: str, store_from_bundle: str) -> tup
 def robot_base_yaw(robot: str) -> float:
     """Yaw from the robot URDF's base frame to the prsc base frame (arm along +y)."""
     if robot == "panda":
-        from assets.panda import PANDA_BASE_YAW
+        from prsc.assets.panda import PANDA_BASE_YAW
 
         return PANDA_BASE_YAW
     return 0.0

@@ -18,10 +18,10 @@ from pathlib import Path
 
 import numpy as np
 
-from backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
-from backends.scene import Scene
-from backends.store import AssetStore, relative_path
-from backends.urdf import robot_base_yaw
+from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
+from prsc.backends.scene import Scene
+from prsc.backends.store import AssetStore, relative_path
+from prsc.backends.urdf import robot_base_yaw
 from prsc.geometry.rotations import matrix_to_quat, rot_z
 
 GROUND_HALF_SIZE = 50.0
@@ -88,7 +88,7 @@ def _part_prim(stage, path: str, part, folder: Path, rgba):
 
 def _mesh_usd(obj_path: str) -> Path:
     """A USD layer beside a normalised OBJ holding it as a Mesh default prim (made once)."""
-    from backends.files import atomic_write
+    from prsc.backends.files import atomic_write
 
     target = Path(obj_path).with_suffix(".usda")
     if not target.is_file():

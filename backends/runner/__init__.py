@@ -6,6 +6,6 @@
 
 from __future__ import annotations
 
-from backends.runner.episode import OUTCOMES, EpisodeResult, run_episode
+from prsc.backends.runner.episode import OUTCOMES, EpisodeResult, run_episode
 
 __all__ = ["OUTCOMES", "EpisodeResult", "run_episode"]

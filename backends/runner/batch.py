@@ -9,7 +9,7 @@ import sys
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
-from backends.runner.episode import EpisodeResult
+from prsc.backends.runner.episode import EpisodeResult
 
 
 @dataclass(frozen=True)
@@ -44,7 +44,7 @@ def choose_gl_backend() -> str:
 
 def _run_task(task: EpisodeTask) -> EpisodeResult:
     """Worker entry point (module level so spawn can pickle it)."""
-    from backends.runner.episode import run_episode
+    from prsc.backends.runner.episode import run_episode
 
     return run_episode(task.scene, task.mjcf_path, task.seed)
 

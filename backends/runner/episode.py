@@ -16,10 +16,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from assets import panda
-from backends.runner.motion import Arm, Simulation, Unreachable
-from backends.runner.perception import CeilingCamera, locate_cube
-from backends.runner.roles import Roles, find_roles, footprint_distance
+from prsc.assets import panda
+from prsc.backends.runner.motion import Arm, Simulation, Unreachable
+from prsc.backends.runner.perception import CeilingCamera, locate_cube
+from prsc.backends.runner.roles import Roles, find_roles, footprint_distance
 from prsc.geometry.rotations import quat_to_matrix
 
 OUTCOMES = ("success", "perception_fault", "no_path", "poor_grip", "other")

@@ -7,7 +7,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from backends.runner.episode import EpisodeResult, run_episode
+from prsc.backends.runner.episode import EpisodeResult, run_episode
 
 FRAME_WIDTH = 480
 FRAME_HEIGHT = 360

@@ -8,7 +8,7 @@ import mink
 import mujoco
 import numpy as np
 
-from assets import panda
+from prsc.assets import panda
 
 # Reached means: tool centre within 5 mm and 3 degrees of the target.
 POSITION_TOLERANCE = 0.005

@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from assets import panda
-from backends.runner.ik import ArmIK, IKSolution
+from prsc.assets import panda
+from prsc.backends.runner.ik import ArmIK, IKSolution
 
 CONTROL_STEPS = 5  # physics steps per control update (10 ms at the 2 ms timestep)
 JOINT_SPEED = 1.2  # rad/s, average over a move (min-jerk peaks at 1.9x, under the Panda's 2.17)

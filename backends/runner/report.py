@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from backends.files import atomic_write
-from backends.runner.episode import OUTCOMES, EpisodeResult
+from prsc.backends.files import atomic_write
+from prsc.backends.runner.episode import OUTCOMES, EpisodeResult
 from prsc.geometry.rotations import quat_to_matrix
 
 OUTCOME_COLOURS = {

@@ -65,7 +65,7 @@ def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
 
     Validated here, before any output is written, so that an error points into the file
     (line of a .jsonl, position in a list) rather than surfacing halfway through a run."""
-    from backends.scene import parse_scene
+    from prsc.backends.scene import parse_scene
     from prsc.syntax import decode_text
 
     text = decode_text(_read_input(path) if data is None else data, str(path))
@@ -140,7 +140,7 @@ class Job:
 
     def relative(self, target: str, index: int) -> str:
         """Path of a scene's output for one target, relative to the manifest."""
-        from backends import TARGETS
+        from prsc.backends import TARGETS
 
         return f"{target}/{TARGETS[target].filename(index, self.width)}"
 
@@ -150,10 +150,10 @@ class Job:
 
 def render_one(job: Job, index: int) -> tuple[int, dict[str, str], list[str]]:
     """Render and write the missing outputs of one scene; returns its files and warnings."""
-    from backends import TARGETS
-    from backends.files import atomic_write, atomic_write_tree
-    from backends.scene import parse_scene
-    from backends.store import AssetStore
+    from prsc.backends import TARGETS
+    from prsc.backends.files import atomic_write, atomic_write_tree
+    from prsc.backends.scene import parse_scene
+    from prsc.backends.store import AssetStore
 
     root = Path(job.root)
     store = AssetStore(root / "assets")
@@ -180,7 +180,7 @@ def render_one(job: Job, index: int) -> tuple[int, dict[str, str], list[str]]:
                     atomic_write(path, data)
             except OSError as error:
                 raise write_error(error, path) from None
-    from backends.bodies import UnknownModelWarning
+    from prsc.backends.bodies import UnknownModelWarning
 
     for w in caught:  # others (e.g. MuJoCo's mesh decoder) go back to Python's filters
         if not issubclass(w.category, UnknownModelWarning):
@@ -292,7 +292,7 @@ def _remove_stale(root: Path, manifest: dict) -> None:
 
 
 def _write_manifest(root: Path, manifest: dict) -> None:
-    from backends.files import atomic_write
+    from prsc.backends.files import atomic_write
 
     try:
         atomic_write(root / MANIFEST, json.dumps(manifest, indent=1) + "\n")
@@ -320,7 +320,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
 
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
     (--include) are searched for a spec's imports."""
-    from backends import TARGETS
+    from prsc.backends import TARGETS
 
     unknown = [t for t in targets if t not in TARGETS]
     if unknown or not targets:
@@ -384,7 +384,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         if k not in pending:
             entries.setdefault(k, {}).update({t: job.relative(t, k) for t in targets})
 
-    from backends.bodies import reset_model_warnings
+    from prsc.backends.bodies import reset_model_warnings
 
     reset_model_warnings()  # once per class per run, also in workers forked below
     seen_warnings: set[str] = set()

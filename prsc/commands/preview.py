@@ -67,9 +67,9 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE) -> np.
     """An RGB image (height, width, 3) of one scene from an oblique overview camera."""
     import mujoco
 
-    from backends.mjcf import render
-    from backends.scene import parse_scene
-    from backends.store import AssetStore
+    from prsc.backends.mjcf import render
+    from prsc.backends.scene import parse_scene
+    from prsc.backends.store import AssetStore
 
     path = folder / "mjcf" / f"{scene.get('index', 0)}.xml"
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -133,7 +133,7 @@ def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[st
     labels = [f"scene {s.get('index', k)}" for k, s in enumerate(scenes)]
     import io
 
-    from backends.files import atomic_write
+    from prsc.backends.files import atomic_write
 
     buffer = io.BytesIO()
     contact_sheet(images, labels, buffer)  # type: ignore[arg-type]

@@ -55,7 +55,7 @@ def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int,
 
 def _check_roles(source: Path, count: int | None, seed: int, include_dirs: Sequence[str] = ()) -> None:
     """Refuse scenes that are not handover scenes before anything is compiled or written."""
-    from backends.runner.roles import find_roles
+    from prsc.backends.runner.roles import find_roles
     from prsc.commands.compile import _read_scene_file, _spec_sampler
 
     if source.suffix in (".json", ".jsonl"):
@@ -82,10 +82,10 @@ def run(args: argparse.Namespace) -> int:
     source = Path(args.file)
     _check_roles(source, args.n, args.seed, args.include)
     console = Console(stderr=True)
-    from backends.runner.batch import EpisodeTask, choose_gl_backend, run_tasks
-    from backends.runner.frames import record_episode, write_strip
-    from backends.runner.report import plot_cube_map, plot_outcomes, summary_table, write_results
-    from backends.runner.roles import find_roles
+    from prsc.backends.runner.batch import EpisodeTask, choose_gl_backend, run_tasks
+    from prsc.backends.runner.frames import record_episode, write_strip
+    from prsc.backends.runner.report import plot_cube_map, plot_outcomes, summary_table, write_results
+    from prsc.backends.runner.roles import find_roles
 
     choose_gl_backend()
     out = args.output or Path("out") / f"run-{source.stem}"

@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from assets import panda
+from prsc.assets import panda
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from backends import files as backend_files
+from prsc.backends import files as backend_files
 from prsc.cli import main
 from prsc.commands.compile import compile_scenes
 from tests.backends import readback
@@ -75,11 +75,11 @@ def test_rerun_skips_scenes_already_written(tmp_path, monkeypatch):
     source = _jsonl(tmp_path, _scenes(3))
     root = compile_scenes(str(source), ["mjcf", "json"], 2, 0, str(tmp_path / "out"))
     before = {p: p.stat().st_mtime_ns for p in root.rglob("*.xml")}
-    import backends.mjcf
+    import prsc.backends.mjcf
 
     calls = []
-    original = backends.mjcf.render
-    monkeypatch.setattr(backends.mjcf, "render", lambda *a: calls.append(a[0].index) or original(*a))
+    original = prsc.backends.mjcf.render
+    monkeypatch.setattr(prsc.backends.mjcf, "render", lambda *a: calls.append(a[0].index) or original(*a))
     compile_scenes(str(source), ["mjcf", "json"], 3, 0, str(tmp_path / "out"))
     assert calls == [2]  # only the new scene is rendered
     assert all(p.stat().st_mtime_ns == t for p, t in before.items())

@@ -197,7 +197,7 @@ def test_sdf_robot_kinematics_match_the_urdf(handmade):
     """At the home posture every Panda link sits in the same place whether loaded from SDF or URDF."""
     import pybullet as p
 
-    from assets.panda import ARM_JOINTS, HOME_QPOS
+    from prsc.assets.panda import ARM_JOINTS, HOME_QPOS
 
     _, root = _files(handmade, "rotated_robot")
     client = p.connect(p.DIRECT)

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from assets.parts import Part
-from assets.registry import PART_ASSETS
-from backends.inertia import composite_inertial
+from prsc.assets.parts import Part
+from prsc.assets.registry import PART_ASSETS
+from prsc.backends.inertia import composite_inertial
 from prsc.geometry.rotations import quat_to_matrix
 
 
@@ -77,7 +77,7 @@ def test_assets_stay_inside_their_box():
 def test_a_fitted_mesh_has_the_inertia_of_the_scaled_mesh(tmp_path):
     import trimesh
 
-    from backends.store import AssetStore
+    from prsc.backends.store import AssetStore
 
     source = tmp_path / "cone.obj"
     cone = trimesh.creation.cone(radius=2.0, height=3.0, sections=64)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from backends.runner.episode import OUTCOMES, run_episode
+from prsc.backends.runner.episode import OUTCOMES, run_episode
 from prsc.cli import main
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from backends.runner.episode import HandoverEpisode, load_model
-from backends.runner.perception import colour_mask, deproject, intrinsics_for, locate_cube
+from prsc.backends.runner.episode import HandoverEpisode, load_model
+from prsc.backends.runner.perception import colour_mask, deproject, intrinsics_for, locate_cube
 
 
 def _settled(scene, mjcf):

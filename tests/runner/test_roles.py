@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from backends.runner.roles import find_roles
+from prsc.backends.runner.roles import find_roles
 from prsc.errors import PrscError
 
 
