@@ -1,17 +1,16 @@
-"""One handover episode: perceive, pick with the left Panda, hand over, pick with the right, place.
+"""The handover controller: perceive, pick with the left Panda, hand over, pick with the right, place.
 
 The controller is the paper's open-loop pipeline (section IV): the ceiling RGB-D camera
 locates the cube, IK plans top-down tool waypoints, position servos track them, and the
 grasp is physical (finger friction against gripper force). The outcome is decided from
-simulator ground truth at the first failing stage.
+simulator ground truth at the first failing stage. `handover` is the default controller of
+`prsc run` (see controller.py for the interface every controller follows).
 """
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
-from dataclasses import asdict, dataclass
 from pathlib import Path
+
 
 import mujoco
 import numpy as np
@@ -19,6 +18,7 @@ import numpy as np
 from prsc.assets import panda
 from prsc.backends.runner.motion import Arm, Simulation, Unreachable
 from prsc.backends.runner.perception import CeilingCamera, locate_cube
+from prsc.backends.runner.report import plot_cube_map
 from prsc.backends.runner.roles import Roles, find_roles, footprint_distance
 from prsc.geometry.rotations import quat_to_matrix
 
@@ -31,24 +31,6 @@ HANDOVER_REACH = 0.45  # m ahead of the robots' midpoint, along their mean forwa
 PLACE_CLEARANCE = 0.012  # m between the cube's bottom and the surface when released
 SLIP_TOLERANCE = 0.02  # m the cube may shift in the gripper between lift and release
 MIN_GRIP_OPENING = 0.25  # fingers closer than this fraction of the cube's half width hold nothing
-
-
-@dataclass(frozen=True)
-class EpisodeResult:
-    """One line of results.jsonl."""
-
-    index: int
-    seed: int
-    outcome: str
-    reason: str
-    cube_initial: list[float]
-    cube_final: list[float]
-    sim_seconds: float
-    wall_seconds: float
-
-    def to_json(self) -> dict:
-        """The JSON object written to results.jsonl."""
-        return asdict(self)
 
 
 class EpisodeEnd(Exception):
@@ -91,13 +73,12 @@ def _handover_point(scene: dict, roles: Roles, cube_half: float) -> np.ndarray:
 class HandoverEpisode:
     """The controller and its ground-truth checks for one compiled scene."""
 
-    def __init__(self, scene: dict, model: mujoco.MjModel, data: mujoco.MjData,
-                 observer: Callable[[str, mujoco.MjModel, mujoco.MjData], None] | None = None):
+    def __init__(self, scene: dict, model: mujoco.MjModel, data: mujoco.MjData):
         self.scene = scene
         self.roles = find_roles(scene)
         self.model = model
         self.data = data
-        self.sim = Simulation(model, data, observer)
+        self.sim = Simulation(model, data)
         self.cube_id = model.body(self.roles.cube["name"]).id
         dims = np.asarray(self.roles.cube["dimensions"], float)
         self.cube_half = float(dims[2]) / 2
@@ -221,48 +202,39 @@ class HandoverEpisode:
         return "other", f"cube ended outside the target tray, at {where}"
 
 
-def load_model(mjcf_path: str | Path) -> mujoco.MjModel:
-    """Load a scene MJCF with the simulation options the controller is tuned for."""
-    model = mujoco.MjModel.from_xml_path(str(mjcf_path))
-    model.opt.timestep = 0.002
-    model.opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    model.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    model.opt.impratio = 10.0
-    return model
+class HandoverController:
+    """`prsc run`'s default controller: the two-arm handover of the paper's case study.
+
+    The controller draws nothing at random: every failure comes from the scene itself."""
+
+    outcomes = OUTCOMES
+
+    def __call__(self, scene: dict, model: mujoco.MjModel, data: mujoco.MjData) -> dict:
+        """Run one episode; the outcome, its reason and where the cube started and ended."""
+        episode = HandoverEpisode(scene, model, data)
+        episode.sim.wait(0.3)  # the cube and trays settle onto their supports
+        cube_initial = episode.cube_position()
+        try:
+            outcome, reason = episode.run()
+        except (FloatingPointError, mujoco.FatalError) as error:
+            outcome, reason = "other", f"simulation failed: {error}"
+        finally:
+            if episode.camera is not None:
+                episode.camera.close()
+        return {"outcome": outcome, "reason": reason,
+                "cube_initial": [round(float(v), 5) for v in cube_initial],
+                "cube_final": [round(float(v), 5) for v in episode.cube_position()]}
+
+    @staticmethod
+    def check(scene: dict) -> None:
+        """Refuse a scene without two Pandas, two Trays, one Cube and one Camera (PrscError)."""
+        find_roles(scene)
+
+    @staticmethod
+    def report(records: list[dict], scenes: list[dict], folder: Path, title: str) -> list[Path]:
+        """The cube's start positions coloured by outcome (cube_map.png)."""
+        trays = [find_roles(scene).source_tray for scene in scenes]
+        return [plot_cube_map(records, trays, folder / "cube_map.png", title)]
 
 
-def run_episode(scene: dict, mjcf_path: str | Path, seed: int | None = None,
-                observer: Callable[[str, mujoco.MjModel, mujoco.MjData], None] | None = None) -> EpisodeResult:
-    """Simulate the handover controller in one compiled scene and classify the outcome.
-
-    The controller draws nothing at random: every failure comes from the scene itself.
-    `seed` is recorded (default: the scene's own seed); `observer(label, model, data)` is called at
-    the controller's key moments (frame recording).
-    """
-    started = time.perf_counter()
-    model = load_model(mjcf_path)
-    data = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, data)
-    episode = HandoverEpisode(scene, model, data, observer)
-    for arm in (episode.left, episode.right):
-        arm.reset_home(model, data)
-    mujoco.mj_forward(model, data)
-    episode.sim.wait(0.3)  # the cube and trays settle onto their supports
-    cube_initial = episode.cube_position()
-    try:
-        outcome, reason = episode.run()
-    except (FloatingPointError, mujoco.FatalError) as error:
-        outcome, reason = "other", f"simulation failed: {error}"
-    finally:
-        if episode.camera is not None:
-            episode.camera.close()
-    return EpisodeResult(
-        index=int(scene.get("index", 0)),
-        seed=int(scene.get("seed", 0) if seed is None else seed),
-        outcome=outcome,
-        reason=reason,
-        cube_initial=[round(float(v), 5) for v in cube_initial],
-        cube_final=[round(float(v), 5) for v in episode.cube_position()],
-        sim_seconds=round(float(data.time), 3),
-        wall_seconds=round(time.perf_counter() - started, 3),
-    )
+handover = HandoverController()
