@@ -19,44 +19,10 @@ REPO = Path(__file__).resolve().parents[2]
 CUBES = REPO / "tests" / "data" / "three_cubes.prs"
 INCLUDE = ["-I", str(REPO / "specs")]
 
-# The controller a user writes: three cubes on a table must stay put for a simulated second.
-STAY_PUT = textwrap.dedent('''
-    import mujoco
-    import numpy as np
-
-
-    class StayPut:
-        outcomes = ("still", "moved")
-
-        def __call__(self, scene, model, data):
-            names = [o["name"] for o in scene["objects"] if o["class"] == "Cube"]
-            ids = [model.body(name).id for name in names]
-            start = data.xpos[ids].copy()
-            while data.time < 1.0:
-                mujoco.mj_step(model, data)
-            drift = np.linalg.norm(data.xpos[ids] - start, axis=1)
-            worst = int(np.argmax(drift))
-            moved = drift[worst] > 0.005
-            reason = f"{names[worst]} moved {drift[worst] * 1000:.1f} mm" if moved else ""
-            return {"outcome": "moved" if moved else "still", "reason": reason,
-                    "drift_mm": [round(float(d) * 1000, 3) for d in drift]}
-
-
-    stay_put = StayPut()
-''')
-
-
 def records(path: Path) -> list[dict]:
     """results.jsonl without the wall-clock field."""
     return [{k: v for k, v in json.loads(line).items() if k != "wall_seconds"}
             for line in path.read_text().splitlines()]
-
-
-@pytest.fixture
-def stay_put(tmp_path) -> str:
-    path = tmp_path / "stay_put.py"
-    path.write_text(STAY_PUT)
-    return f"{path}:stay_put"
 
 
 def test_a_user_controller_from_a_file(stay_put, tmp_path, capsys):
@@ -128,13 +94,13 @@ def test_a_file_mujoco_cannot_load_stops_the_campaign(stay_put, tmp_path, capsys
     assert [r["outcome"] for r in records(out / "results.jsonl")] == ["still"]  # no episode recorded as an outcome
 
 
-def _prsc(*args: str, env: dict | None = None) -> list[str]:
+def _prsc(*args: str) -> list[str]:
     return [sys.executable, "-c", "import sys; from prsc.cli import main; sys.exit(main())", *args]
 
 
-def test_a_killed_campaign_resumes_to_the_file_a_clean_run_writes(tmp_path):
+def test_a_killed_campaign_resumes_to_the_file_a_clean_run_writes(stay_put, tmp_path):
     slow = tmp_path / "slow.py"
-    slow.write_text(STAY_PUT + "\n\nimport time\n\ndef slow(scene, model, data):\n"
+    slow.write_text(Path(stay_put.rpartition(":")[0]).read_text() + "\n\nimport time\n\ndef slow(scene, model, data):\n"
                                 "    time.sleep(0.3)\n    return stay_put(scene, model, data)\n")
     env = dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl"))
     common = [str(CUBES), *INCLUDE, "-n", "8", "--controller", f"{slow}:slow"]
@@ -154,7 +120,7 @@ def test_a_killed_campaign_resumes_to_the_file_a_clean_run_writes(tmp_path):
 
     assert subprocess.run(_prsc("run", *common, "-o", str(killed)), env=env, capture_output=True).returncode == 0
     clean = tmp_path / "clean"
-    assert subprocess.run(_prsc("run", *common, "-o", str(clean)), env=env, capture_output=True).returncode == 0
+    assert main(["run", *common, "-o", str(clean)]) == 0
     assert records(results) == records(clean / "results.jsonl")
     after = {r["index"]: r for r in map(json.loads, results.read_text().splitlines())}
     assert all(after[r["index"]] == r for r in before)  # recorded episodes were not run again
