@@ -11,11 +11,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-
 import mujoco
 import numpy as np
 
-from prsc.assets import panda
+from prsc.backends.runner.grasping import PLACE_CLEARANCE, GraspFailure, HeldCube
 from prsc.backends.runner.motion import Arm, Simulation, Unreachable
 from prsc.backends.runner.perception import CeilingCamera, locate_cube
 from prsc.backends.runner.report import plot_cube_map
@@ -25,12 +24,7 @@ from prsc.geometry.rotations import quat_to_matrix
 OUTCOMES = ("success", "perception_fault", "no_path", "poor_grip", "other")
 
 PERCEPTION_TOLERANCE = 0.02  # m: a detection further than this from the truth is a fault
-APPROACH_HEIGHT = 0.12  # m above the cube centre before descending
-LIFT_HEIGHT = 0.15  # m the cube is lifted
 HANDOVER_REACH = 0.45  # m ahead of the robots' midpoint, along their mean forward axis
-PLACE_CLEARANCE = 0.012  # m between the cube's bottom and the surface when released
-SLIP_TOLERANCE = 0.02  # m the cube may shift in the gripper between lift and release
-MIN_GRIP_OPENING = 0.25  # fingers closer than this fraction of the cube's half width hold nothing
 
 
 class EpisodeEnd(Exception):
@@ -79,17 +73,15 @@ class HandoverEpisode:
         self.model = model
         self.data = data
         self.sim = Simulation(model, data)
-        self.cube_id = model.body(self.roles.cube["name"]).id
-        dims = np.asarray(self.roles.cube["dimensions"], float)
-        self.cube_half = float(dims[2]) / 2
-        self.cube_half_width = float(min(dims[0], dims[1])) / 2
+        self.cube = HeldCube(self.sim, self.roles.cube)
+        self.cube_half = self.cube.half_height
         self.left = Arm.from_scene(model, data, self.roles.left_robot["name"])
         self.right = Arm.from_scene(model, data, self.roles.right_robot["name"])
         self.camera: CeilingCamera | None = None
 
     def cube_position(self) -> np.ndarray:
         """Ground-truth cube centre."""
-        return self.data.xpos[self.cube_id].copy()
+        return self.cube.position()
 
     def perceive(self, stage: str) -> np.ndarray:
         """Locate the cube with the ceiling camera; a miss or a > 2 cm error ends the episode."""
@@ -110,67 +102,22 @@ class HandoverEpisode:
                              f"{detection.pixels} px)")
         return detection.centre
 
-    def grip_offset(self, arm: Arm) -> np.ndarray:
-        """Cube centre relative to the tool centre (ground truth)."""
-        return self.cube_position() - self.data.site_xpos[arm.tcp_id]
-
-    def gripper_closed_empty(self, arm: Arm) -> bool:
-        """Whether the fingers closed (nearly) fully, i.e. on nothing."""
-        return bool(self.data.qpos[arm.finger_adr] < MIN_GRIP_OPENING * self.cube_half_width)
-
     def pick_and_place(self, arm: Arm, cube: np.ndarray, place: np.ndarray, stage: str, go_home: bool) -> None:
-        """Plan every waypoint, then pick the cube at `cube` and release it with its centre at `place`."""
-        up = np.array([0.0, 0.0, 1.0])
-        home = np.array(panda.HOME_QPOS)
-        above = cube + up * APPROACH_HEIGHT
-        lifted = cube + up * LIFT_HEIGHT
-        over_place = place + up * max(LIFT_HEIGHT, APPROACH_HEIGHT)
+        """Move the cube from `cube` to `place` with one arm; an unreachable waypoint is `no_path`,
+        a failed grasp `poor_grip`."""
         try:
-            q_above = arm.plan_point(above, home, f"the point above the cube ({stage})")
-            descend = arm.plan_line(above, cube, q_above, f"the cube ({stage})")
-            lift = arm.plan_line(cube, lifted, descend[-1], f"the lift above the cube ({stage})")
-            q_over = arm.plan_point(over_place, lift[-1], f"the point above the release ({stage})")
-            lower = arm.plan_line(over_place, place, q_over, f"the release point ({stage})")
-            retreat = arm.plan_line(place, over_place, lower[-1], f"the retreat ({stage})")
+            self.cube.pick_and_place(arm, cube, place, stage, go_home)
         except Unreachable as error:
             raise EpisodeEnd("no_path", str(error)) from None
-
-        start_z = self.cube_position()[2]
-        self.sim.move(arm, [q_above])
-        self.sim.snapshot(f"above the cube ({stage})")
-        self.sim.move(arm, descend, seconds=0.8)
-        self.sim.snapshot(f"grasp ({stage})")
-        self.sim.grip(arm, panda.GRIPPER_CLOSED, 0.5)
-        if self.gripper_closed_empty(arm):
-            raise EpisodeEnd("poor_grip", f"{stage}: the gripper closed on nothing")
-        self.sim.move(arm, lift, seconds=0.8)
-        self.sim.wait(0.2)
-        self.sim.snapshot(f"lift ({stage})")
-        rise = self.cube_position()[2] - start_z
-        if rise < 0.5 * LIFT_HEIGHT:
-            raise EpisodeEnd("poor_grip", f"{stage}: grasp closed but the cube was not lifted "
-                                          f"(it rose {rise * 100:.1f} cm of {LIFT_HEIGHT * 100:.0f})")
-        held = self.grip_offset(arm)
-        self.sim.move(arm, [q_over])
-        self.sim.move(arm, lower, seconds=0.8)
-        self.sim.snapshot(f"release ({stage})")
-        slip = float(np.linalg.norm(self.grip_offset(arm) - held))
-        if slip > SLIP_TOLERANCE:
-            raise EpisodeEnd("poor_grip", f"{stage}: the cube slipped {slip * 100:.1f} cm in the gripper while carried")
-        self.sim.grip(arm, panda.GRIPPER_OPEN, 0.4)
-        self.sim.move(arm, retreat, seconds=0.6)
-        if go_home:
-            self.sim.move(arm, [home])
+        except GraspFailure as failure:
+            raise EpisodeEnd("poor_grip", str(failure)) from None
 
     def run(self) -> tuple[str, str]:
         """Run the task; return (outcome, reason)."""
         roles = self.roles
         try:
             handover = _handover_point(self.scene, roles, self.cube_half)
-            target = np.asarray(roles.target_tray["position"], float).copy()
-            tray_bottom = target[2] - float(np.abs(quat_to_matrix(roles.target_tray["quaternion"])[2])
-                                             @ (np.asarray(roles.target_tray["dimensions"], float) / 2))
-            target[2] = tray_bottom + self.cube_half + PLACE_CLEARANCE
+            target = self.cube.release_point(roles.target_tray)
             cube = self.perceive("source tray")
             # The left arm goes home afterwards to clear the camera's view of the handover point.
             self.pick_and_place(self.left, cube, handover, "left arm", go_home=True)
@@ -186,14 +133,7 @@ class HandoverEpisode:
 
     def final_outcome(self) -> tuple[str, str]:
         """`success` when the cube rests inside the target tray, else `other` with where it is."""
-        tray = self.model.body(self.roles.target_tray["name"]).id
-        rot = self.data.xmat[tray].reshape(3, 3)
-        local = rot.T @ (self.cube_position() - self.data.xpos[tray])
-        half = np.asarray(self.roles.target_tray["dimensions"], float) / 2
-        velocity = np.zeros(6)
-        mujoco.mj_objectVelocity(self.model, self.data, mujoco.mjtObj.mjOBJ_BODY, self.cube_id, velocity, 0)
-        speed = float(np.linalg.norm(velocity[3:]))
-        inside = bool(np.all(np.abs(local[:2]) < half[:2]) and -half[2] < local[2] < half[2] + 2 * self.cube_half)
+        inside, speed = self.cube.resting_in(self.roles.target_tray)
         if inside and speed < 0.05:
             return "success", ""
         where = np.round(self.cube_position(), 3).tolist()

@@ -138,3 +138,19 @@ def test_prsc_run_with_mujoco_gl_unset(tmp_path):
     # Every episode got as far as the camera: no GL failure recorded as an outcome.
     assert all(r["outcome"] in ("success", "perception_fault", "no_path", "poor_grip") for r in lines), lines
     assert any(r["sim_seconds"] > 1 for r in lines)
+
+
+def test_the_example_pick_place_controller(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", str(REPO / "specs" / "pick_place.prs"), "-n", "3", "-o", str(out),
+                 "--controller", "prsc.backends.runner.pick_place:pick_place"]) == 0
+    lines = records(out / "results.jsonl")
+    assert [r["outcome"] for r in lines] == ["placed"] * 3, lines
+    assert all(r["distance_to_target"] < 0.03 for r in lines)
+    table = capsys.readouterr().out
+    assert all(label in table for label in ("placed", "unreachable", "dropped", "missed"))
+    # A scene the controller cannot drive is refused before anything is compiled.
+    assert main(["run", str(CUBES), *INCLUDE, "-o", str(tmp_path / "cubes"),
+                 "--controller", "prsc.backends.runner.pick_place:pick_place"]) == 2
+    assert "needs one Robot, two Trays and one Cube (found 0 Robot, 0 Tray, 3 Cube)" in capsys.readouterr().err
+    assert not (tmp_path / "cubes").exists()
