@@ -1,6 +1,16 @@
-"""Offscreen rendering of a model with the process's shared GL context (see gl.py)."""
+"""Offscreen rendering of a model with the process's shared GL context (see gl.py).
+
+A MuJoCo render context (MjrContext) holds what the GPU side needs of a model: its
+meshes, textures, height fields, skins and materials' textures, plane grids, buffer
+sizes. Uploading the Panda's meshes costs about 0.1 CPU s, so a worker keeps the context
+of the last model and hands it to the next model with the same render assets (every scene
+of a spec), after setting the few numbers that follow the model's size (fog, shadow clip).
+The images are the same bits a fresh context renders (tests/runner/test_rendering.py).
+"""
 
 from __future__ import annotations
+
+import hashlib
 
 import mujoco
 import numpy as np
@@ -23,12 +33,7 @@ class OffscreenRenderer:
         self.width = width
         self.height = height
         gl_context()
-        try:
-            self._context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
-        except mujoco.FatalError as error:
-            raise InfrastructureError(f"cannot make a MuJoCo render context: {error}") from None
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, self._context)
-        self._context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
+        self._context = _render_context(model)
         self._scene = mujoco.MjvScene(model=model, maxgeom=10000)
         self._option = mujoco.MjvOption()
         self._rect = mujoco.MjrRect(0, 0, width, height)
@@ -67,11 +72,56 @@ class OffscreenRenderer:
         return np.flipud(_metric_depth(raw, self.model)).copy()
 
     def close(self) -> None:
-        """Free the model's render context (the GL context stays for the next model)."""
-        if self._context is not None:
-            gl_context()
-            self._context.free()
-            self._context = None
+        """Done with this model (its render context stays for the next model with the same assets)."""
+        self._context = None
+
+
+_kept: tuple[str, mujoco.MjrContext] | None = None  # (render-asset key, context) of the last model
+
+
+def _render_key(model: mujoco.MjModel) -> str:
+    """A digest of everything mjr_makeContext uploads or sizes from a model, except the per-scene numbers."""
+    digest = hashlib.sha256()
+    planes = model.geom_type == mujoco.mjtGeom.mjGEOM_PLANE
+    parts = [model.geom_size[planes], model.geom_matid[planes], np.array([model.ngeom])]
+    for prefix in ("mesh_", "tex_", "hfield_", "skin_", "mat_", "flex_"):
+        parts += [getattr(model, n) for n in sorted(dir(model)) if n.startswith(prefix)
+                  and isinstance(getattr(model, n, None), np.ndarray)]
+    g, q = model.vis.global_, model.vis.quality
+    parts.append(np.array([g.offwidth, g.offheight, q.offsamples, q.shadowsize, q.numslices, q.numstacks,
+                           q.numquads, model.nmesh, model.ntex, model.nhfield, model.nskin, model.nmat]))
+    for part in parts:
+        array = np.ascontiguousarray(part)
+        digest.update(str(array.dtype).encode() + str(array.shape).encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def _render_context(model: mujoco.MjModel) -> mujoco.MjrContext:
+    """This worker's render context for a model: the kept one when the render assets match, else a new one."""
+    global _kept
+    key = _render_key(model)
+    if _kept is not None and _kept[0] == key:
+        context = _kept[1]
+        # What mjr_makeContext derives from the model's size and map settings.
+        context.fogStart = model.stat.extent * model.vis.map.fogstart
+        context.fogEnd = model.stat.extent * model.vis.map.fogend
+        context.fogRGBA = model.vis.rgba.fog
+        context.shadowClip = model.stat.extent * model.vis.map.shadowclip
+        context.shadowScale = model.vis.map.shadowscale
+        context.lineWidth = model.vis.global_.linewidth
+    else:
+        if _kept is not None:
+            _kept[1].free()
+            _kept = None
+        try:
+            context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
+        except mujoco.FatalError as error:
+            raise InfrastructureError(f"cannot make a MuJoCo render context: {error}") from None
+        _kept = (key, context)
+    mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, context)
+    context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
+    return context
 
 
 def _metric_depth(raw: np.ndarray, model: mujoco.MjModel) -> np.ndarray:
