@@ -11,6 +11,7 @@ The images are the same bits a fresh context renders (tests/runner/test_renderin
 from __future__ import annotations
 
 import hashlib
+import os
 
 import mujoco
 import numpy as np
@@ -117,7 +118,9 @@ def _render_context(model: mujoco.MjModel) -> mujoco.MjrContext:
         try:
             context = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150.value)
         except mujoco.FatalError as error:
-            raise InfrastructureError(f"cannot make a MuJoCo render context: {error}") from None
+            raise InfrastructureError(f"no offscreen OpenGL rendering with MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r} "
+                                      f"(MuJoCo: {str(error).strip()}); unset MUJOCO_GL to let prsc choose "
+                                      "EGL or OSMesa") from None
         _kept = (key, context)
     mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, context)
     context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR

@@ -172,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
     controller_ref = parse_target(args.controller)
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)
-    executor = make_executor(args.executor, args.jobs, args.address, start="spawn", tasks_per_worker=25)
+    executor = make_executor(args.executor, args.jobs, args.address, start="spawn")
     check = getattr(controller, "check", None)
     if check is not None:
         check(_first_scene(source, args.seed, args.include))  # before anything is compiled or written
@@ -214,7 +214,8 @@ def run(args: argparse.Namespace) -> int:
                 progress.advance(bar)
 
             cpu_before = _cpu_seconds()
-            executor.map(run_task, WorkerConfig(gl_backend), todo, finished)
+            executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=args.jobs > 1 or args.executor == "ray"),
+                         todo, finished)
             cpu_used = _cpu_seconds() - cpu_before
     finally:
         appender.close()

@@ -154,3 +154,16 @@ def test_the_example_pick_place_controller(tmp_path, capsys):
                  "--controller", "prsc.backends.runner.pick_place:pick_place"]) == 2
     assert "needs one Robot, two Trays and one Cube (found 0 Robot, 0 Tray, 3 Cube)" in capsys.readouterr().err
     assert not (tmp_path / "cubes").exists()
+
+
+def test_no_gl_context_stops_the_campaign(tmp_path):
+    """A GL backend that cannot render here (GLFW without a display) is an error, not an outcome."""
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "PYOPENGL_PLATFORM")}
+    env["MUJOCO_GL"] = "glfw"
+    out = tmp_path / "run"
+    done = subprocess.run(_prsc("run", str(REPO / "specs" / "table_cube.prs"), "-n", "2", "-o", str(out)),
+                          env=env, capture_output=True, text=True)
+    assert done.returncode == 2, done.stderr
+    assert "prsc: error: no offscreen OpenGL rendering with MUJOCO_GL='glfw'" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert (out / "results.jsonl").read_text() == ""  # no episode recorded as an outcome
