@@ -260,5 +260,6 @@ def _write_strips(tasks: list, records: list[dict], out: Path, count: int) -> No
     for task, record in failures[:count]:
         again, frames = record_episode(task, record["sim_seconds"])
         note = "" if again.outcome == record["outcome"] else f" (re-run gave {again.outcome}!)"
-        write_strip(frames, f"episode {record['index']}: {record['outcome']}{note}: {record['reason']}",
+        write_strip(frames, f"episode {record['index']}: {record['outcome']}{note}: {record['reason']} "
+                            "(overview from the +y side looking back: +x is on the left)",
                     out / "failures" / f"episode_{record['index']:04d}_{record['outcome']}.png")
