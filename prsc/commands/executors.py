@@ -110,7 +110,8 @@ def _import_ray():
 @dataclass(frozen=True)
 class RayExecutor:
     """One Ray task per item, on the cluster at `address` (None: a local cluster of `cpus` CPUs started
-    here and stopped afterwards; a Ray session already open in this process is used as it is)."""
+    here, kept for the next map and stopped when this process exits; a Ray session already open in
+    this process is used as it is)."""
 
     address: str | None = None
     cpus: int | None = None
@@ -119,8 +120,7 @@ class RayExecutor:
         """Submit every item as a task; collect results as they finish; return them in item order."""
         ray = _import_ray()
         items = list(items)
-        started_here = not ray.is_initialized()
-        if started_here:
+        if not ray.is_initialized():
             try:
                 if self.address:
                     ray.init(address=self.address, log_to_driver=False)
@@ -129,28 +129,24 @@ class RayExecutor:
             except Exception as error:  # ConnectionError, TimeoutError, RuntimeError... all mean "no cluster"
                 raise PrscError(f"cannot start or reach a Ray cluster{f' at {self.address}' if self.address else ''}: "
                                 f"{type(error).__name__}: {error}") from None
+        remote = ray.remote(num_cpus=1)(_ray_call)
+        boxed = [ray.put(shared)]
+        key = uuid.uuid4().hex
+        pending = {remote.remote(fn, key, boxed, item): k for k, item in enumerate(items)}
+        results: list[Any] = [None] * len(items)
         try:
-            remote = ray.remote(num_cpus=1)(_ray_call)
-            boxed = [ray.put(shared)]
-            key = uuid.uuid4().hex
-            pending = {remote.remote(fn, key, boxed, item): k for k, item in enumerate(items)}
-            results: list[Any] = [None] * len(items)
-            try:
-                while pending:
-                    done, _ = ray.wait(list(pending), num_returns=1)
-                    for ref in done:
-                        number = pending.pop(ref)
-                        results[number] = ray.get(ref)
-                        if on_result is not None:
-                            on_result(results[number])
-            except BaseException:
-                for ref in pending:
-                    ray.cancel(ref, force=True)
-                raise
-            return results
-        finally:
-            if started_here:
-                ray.shutdown()
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                for ref in done:
+                    number = pending.pop(ref)
+                    results[number] = ray.get(ref)
+                    if on_result is not None:
+                        on_result(results[number])
+        except BaseException:
+            for ref in pending:
+                ray.cancel(ref, force=True)
+            raise
+        return results
 
 
 def make_executor(kind: str, jobs: int = 1, address: str | None = None, start: str = "spawn",
