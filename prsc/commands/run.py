@@ -53,13 +53,14 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
 
 
-def _first_scene(source: Path, seed: int, include_dirs: Sequence[str]) -> dict:
-    """Scene 0 of the input, sampled or read, without writing anything."""
+def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: Sequence[str]) -> list[dict]:
+    """The scenes a controller's `check` sees before anything is written: every scene of a JSON
+    input, the first of a spec (all scenes of a spec have the same objects and classes)."""
     from prsc.commands.compile import _read_scene_file, _spec_sampler
 
     if source.suffix in (".json", ".jsonl"):
-        return _read_scene_file(source)[0]
-    return _spec_sampler(str(source), seed, include_dirs)(0)
+        return _read_scene_file(source)[:count or None]
+    return [_spec_sampler(str(source), seed, include_dirs)(0)]
 
 
 def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
@@ -175,7 +176,8 @@ def run(args: argparse.Namespace) -> int:
     executor = make_executor(args.executor, args.jobs, args.address, start="spawn")
     check = getattr(controller, "check", None)
     if check is not None:
-        check(_first_scene(source, args.seed, args.include))  # before anything is compiled or written
+        for scene in _scenes_to_check(source, args.n, args.seed, args.include):
+            check(scene)  # before anything is compiled or written
     console = Console(stderr=True)
     out = args.output or Path("out") / f"run-{source.stem}"
     started = time.perf_counter()
