@@ -133,8 +133,13 @@ class _Appender:
             raise InfrastructureError(value)
         record = value.to_json()
         self.records[record["index"]] = record
-        self._file.write(_line(record) + "\n")
-        self._file.flush()
+        try:
+            self._file.write(_line(record) + "\n")
+            self._file.flush()
+        except OSError as error:
+            from prsc.commands.outputs import write_error
+
+            raise write_error(error, self.path) from None
 
     def close(self) -> None:
         self._file.close()
