@@ -14,7 +14,7 @@ setup: $(STAMP)
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[dev]'
+	$(PY) -m pip install -q -e '.[dev,ray]'
 	touch $(STAMP)
 
 test: $(STAMP)
@@ -36,10 +36,12 @@ datasets: $(STAMP)
 	@for spec in $(DATASET_SPECS); do echo "== $$spec"; \
 	  $(PRSC) compile $$spec --target json,mjcf,urdf,sdf,usd -n $(DATASET_SCENES) --seed 0 -o out/datasets --jobs 2 || exit 1; done
 
-# Samplers side by side (the paper's Table II), then files written per second per format.
+# Samplers side by side (the paper's Table II), files written per second per format, then
+# handover episodes per CPU-second (and where an episode's CPU time goes).
 bench: $(STAMP)
 	$(PRSC) bench ../shared/specs/original/tableCube.prs ../shared/specs/original/tableCubeNaive.prs specs/table_cube.prs
 	$(PY) -m prsc.backends.bench --spec specs/table_cube.prs -n 1000 --jobs 1,2
+	$(PY) -m prsc.backends.runner.bench --spec specs/table_cube.prs -n 21
 
 # The paper's section IV case study: 100 Table-Cube episodes, table + plots in out/casestudy.
 CASESTUDY := $(PRSC) run specs/table_cube.prs -n 100 --seed 0 --jobs 2

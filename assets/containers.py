@@ -1,8 +1,10 @@
 """Open rectangular containers (tray, bin, box): a floor and four walls filling the box.
 
-Walls span the full height of the object's box and the floor lies on its bottom face, so
+The floor covers the whole bottom face and the walls stand on it up to the rim, so
 anything placed `completely on` the container rests on the rim plane and settles onto the
-floor. Thicknesses (the MuJoCo runner reads them here): a tray of the standard 0.2364 x
+floor, and only the floor touches what the container stands on: a tray on a table makes 4
+contacts, not 20 (walls reaching down to the table made four each, and were most of the
+contacts MuJoCo solved in a Table-Cube episode). Thicknesses (the MuJoCo runner reads them here): a tray of the standard 0.2364 x
 0.4522 x 0.028964 m box has a 5.8 mm floor and 9.5 mm walls.
 """
 
@@ -21,12 +23,13 @@ def open_box_parts(dimensions: tuple[float, float, float], floor: float, wall: f
     floor = min(floor, 0.5 * h)
     wall = min(wall, 0.25 * min(w, l))
     # The long walls (x = +-) span the full length; the short ones fit between them.
+    rise, z = h - floor, floor / 2  # the walls' height and centre above the floor
     return (
-        box("floor", (w - 2 * wall, l - 2 * wall, floor), (0.0, 0.0, -h / 2 + floor / 2)),
-        box("wall_left", (wall, l, h), (-w / 2 + wall / 2, 0.0, 0.0)),
-        box("wall_right", (wall, l, h), (w / 2 - wall / 2, 0.0, 0.0)),
-        box("wall_back", (w - 2 * wall, wall, h), (0.0, -l / 2 + wall / 2, 0.0)),
-        box("wall_front", (w - 2 * wall, wall, h), (0.0, l / 2 - wall / 2, 0.0)),
+        box("floor", (w, l, floor), (0.0, 0.0, -h / 2 + floor / 2)),
+        box("wall_left", (wall, l, rise), (-w / 2 + wall / 2, 0.0, z)),
+        box("wall_right", (wall, l, rise), (w / 2 - wall / 2, 0.0, z)),
+        box("wall_back", (w - 2 * wall, wall, rise), (0.0, -l / 2 + wall / 2, z)),
+        box("wall_front", (w - 2 * wall, wall, rise), (0.0, l / 2 - wall / 2, z)),
     )
 
 

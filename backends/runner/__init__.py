@@ -1,11 +1,14 @@
-"""The MuJoCo runner: the paper's camera + IK handover controller over compiled scenes.
+"""The MuJoCo runner: any controller over compiled scenes (see controller.py for the interface).
 
-`run_episode(scene, mjcf_path, seed) -> EpisodeResult` runs one episode; `prsc run`
-(prsc/commands/run.py) compiles scenes, runs them in worker processes and reports.
+`run_episode(task)` runs one episode in this process; `prsc run` (prsc/commands/run.py)
+compiles scenes, runs their episodes on an executor (local processes or Ray) and reports.
+`handover` is the paper's controller and the default; `pick_place` a small example.
 """
 
 from __future__ import annotations
 
-from prsc.backends.runner.episode import OUTCOMES, EpisodeResult, run_episode
+from prsc.backends.runner.controller import DEFAULT_CONTROLLER, ControllerRef, parse_target
+from prsc.backends.runner.faults import InfrastructureError
+from prsc.backends.runner.tasks import EpisodeResult, EpisodeTask
 
-__all__ = ["OUTCOMES", "EpisodeResult", "run_episode"]
+__all__ = ["DEFAULT_CONTROLLER", "ControllerRef", "EpisodeResult", "EpisodeTask", "InfrastructureError", "parse_target"]

@@ -7,26 +7,31 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from prsc.backends.runner.episode import EpisodeResult, run_episode
+from prsc.backends.runner.harness import run_episode
+from prsc.backends.runner.rendering import OffscreenRenderer
+from prsc.backends.runner.tasks import EpisodeResult, EpisodeTask
+
+FRAMES_WITHOUT_SNAPSHOTS = 8  # a controller that names no moments gets frames evenly spaced in time
 
 FRAME_WIDTH = 480
 FRAME_HEIGHT = 360
 
 
 class FrameRecorder:
-    """Observer for `run_episode`: renders an oblique overview of the table at each moment."""
+    """Observer for `run_episode`: renders an oblique overview of the scene at each moment."""
 
     def __init__(self, scene: dict):
         self.scene = scene
         self.frames: list[tuple[str, float, np.ndarray]] = []
-        self._renderer: mujoco.Renderer | None = None
+        self._renderer: OffscreenRenderer | None = None
         self._camera = mujoco.MjvCamera()
 
     def _setup(self, model: mujoco.MjModel) -> None:
         """Create the renderer and aim the free camera at the middle of the non-camera objects."""
-        self._renderer = mujoco.Renderer(model, height=FRAME_HEIGHT, width=FRAME_WIDTH)
+        self._renderer = OffscreenRenderer(model, FRAME_WIDTH, FRAME_HEIGHT)
         points = np.array([o["position"] for o in self.scene["objects"]
-                           if o.get("camera") is None and o.get("class") != "Camera"])
+                           if o.get("camera") is None and o.get("class") != "Camera"]
+                          or [o["position"] for o in self.scene["objects"]] or [[0.0, 0.0, 0.0]])
         lo, hi = points.min(axis=0), points.max(axis=0)
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FREE
         self._camera.lookat[:] = (lo + hi) / 2
@@ -43,27 +48,34 @@ class FrameRecorder:
             last_label, t, image = self.frames[-1]
             self.frames[-1] = (f"{last_label}; {label}", t, image)  # nothing moved since
             return
-        self._renderer.update_scene(data, camera=self._camera)
-        self.frames.append((label, float(data.time), self._renderer.render().copy()))
+        self.frames.append((label, float(data.time), self._renderer.rgb(data, self._camera)))
         if label.startswith("perceive"):
-            camera = next(o["name"] for o in self.scene["objects"] if o.get("camera") is not None)
-            self._renderer.update_scene(data, camera=camera)
-            self.frames.append(("ceiling camera view", float(data.time), self._renderer.render().copy()))
+            name = next(o["name"] for o in self.scene["objects"] if o.get("camera") is not None)
+            camera = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
+            self.frames.append(("ceiling camera view", float(data.time), self._renderer.rgb(data, camera)))
 
     def close(self) -> None:
-        """Release the GL context."""
+        """Release the model's render context."""
         if self._renderer is not None:
             self._renderer.close()
 
 
-def record_episode(scene: dict, mjcf_path: str | Path, seed: int | None = None) -> tuple[EpisodeResult, list]:
-    """Re-run an episode (deterministic) while recording frames."""
-    recorder = FrameRecorder(scene)
+def record_episode(task: EpisodeTask, sim_seconds: float) -> tuple[EpisodeResult, list]:
+    """Re-run an episode (deterministic) while recording frames: at the moments the controller
+    names (`snapshot`), or evenly over its `sim_seconds` when it names none."""
+    named = FrameRecorder(task.scene)
+    timed = FrameRecorder(task.scene)
+    every = max(sim_seconds, 1e-3) / FRAMES_WITHOUT_SNAPSHOTS
+
+    def observe(label: str, model: mujoco.MjModel, data: mujoco.MjData) -> None:
+        (timed if label.startswith("t = ") else named)(label, model, data)
+
     try:
-        result = run_episode(scene, mjcf_path, seed, observer=recorder)
+        result = run_episode(task, observer=observe, frame_every=every)
     finally:
-        recorder.close()
-    return result, recorder.frames
+        named.close()
+        timed.close()
+    return result, named.frames or timed.frames
 
 
 def write_strip(frames: list[tuple[str, float, np.ndarray]], title: str, path: Path, columns: int = 4) -> Path:

@@ -36,12 +36,11 @@ class ArmIK:
 
     def __init__(self, base_pos: np.ndarray, base_quat: np.ndarray):
         spec = panda.panda_mjcf_spec()
-        base = spec.body(panda.BASE_BODY)
-        base.pos = list(base_pos)
-        base.quat = list(base_quat)
         # Kinematics only: no contacts needed.
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
         self.model = spec.compile()
+        self._base = self.model.body(panda.BASE_BODY).id
+        self.place(base_pos, base_quat)
         self._qadr = np.array([self.model.jnt_qposadr[self.model.joint(j).id] for j in panda.ARM_JOINTS])
         self.configuration = mink.Configuration(self.model)
         self.tcp_task = mink.FrameTask(panda.TCP_SITE, "site", position_cost=1.0, orientation_cost=1.0, lm_damping=1e-3)
@@ -49,6 +48,12 @@ class ArmIK:
         self.limits = [mink.ConfigurationLimit(self.model)]
         self.home = self.full_q(np.array(panda.HOME_QPOS))
         self.posture_task.set_target(self.home)
+
+    def place(self, base_pos: np.ndarray, base_quat: np.ndarray) -> None:
+        """Put the arm's base at a world pose (the model is re-posed, not compiled again)."""
+        quat = np.asarray(base_quat, float)
+        self.model.body_pos[self._base] = np.asarray(base_pos, float)
+        self.model.body_quat[self._base] = quat / np.linalg.norm(quat)
 
     def full_q(self, arm_q: np.ndarray) -> np.ndarray:
         """The arm-only model's qpos for arm joint angles (fingers open)."""
@@ -80,3 +85,18 @@ class ArmIK:
         q = self.configuration.q[self._qadr].copy()
         return IKSolution(q=q, position_error=float(np.linalg.norm(error[:3])),
                           orientation_error=float(np.linalg.norm(error[3:])))
+
+
+_solvers: dict[str, ArmIK] = {}
+
+
+def arm_ik(arm: str, base_pos: np.ndarray, base_quat: np.ndarray) -> ArmIK:
+    """The IK solver of the arm named `arm`, placed at a base pose: compiled once per process.
+
+    Every solve starts from the configuration it is given, so a re-posed solver answers
+    exactly as a freshly compiled one would."""
+    if arm not in _solvers:
+        _solvers[arm] = ArmIK(base_pos, base_quat)
+    solver = _solvers[arm]
+    solver.place(base_pos, base_quat)
+    return solver

@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from prsc.assets import panda
-from prsc.backends.runner.ik import ArmIK, IKSolution
+from prsc.backends.runner.harness import snapshot
+from prsc.backends.runner.ik import IKSolution, arm_ik
 
 CONTROL_STEPS = 5  # physics steps per control update (10 ms at the 2 ms timestep)
 JOINT_SPEED = 1.2  # rad/s, average over a move (min-jerk peaks at 1.9x, under the Panda's 2.17)
@@ -48,7 +48,7 @@ class Arm:
             return int(model.jnt_qposadr[model.joint(f"{name}/{joint}").id])
 
         base = data.body(f"{name}/{panda.BASE_BODY}")
-        ik = ArmIK(base.xpos.copy(), base.xquat.copy())
+        ik = arm_ik(name, base.xpos.copy(), base.xquat.copy())
         return cls(
             name=name,
             qpos_adr=np.array([joint_adr(j) for j in panda.ARM_JOINTS]),
@@ -59,14 +59,6 @@ class Arm:
             ik=ik,
             down=ik.tcp_pose(np.array(panda.HOME_QPOS))[1],
         )
-
-    def reset_home(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
-        """Put the arm at its home configuration with the gripper open (initial state)."""
-        data.qpos[self.qpos_adr] = panda.HOME_QPOS
-        data.ctrl[self.ctrl_ids] = panda.HOME_QPOS
-        data.ctrl[self.gripper_id] = panda.GRIPPER_OPEN
-        for joint in panda.FINGER_JOINTS:
-            data.qpos[model.jnt_qposadr[model.joint(f"{self.name}/{joint}").id]] = panda.GRIPPER_OPEN
 
     def plan_line(self, start: np.ndarray, end: np.ndarray, q_start: np.ndarray, label: str) -> list[np.ndarray]:
         """Joint waypoints moving the tool centre straight from `start` to `end`, top-down."""
@@ -89,18 +81,15 @@ class Arm:
 
 
 class Simulation:
-    """Steps a scene, interpolating arm targets smoothly; calls an observer at named moments."""
+    """Steps a scene, interpolating arm targets smoothly; names key moments for frame strips."""
 
-    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData,
-                 observer: Callable[[str, mujoco.MjModel, mujoco.MjData], None] | None = None):
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData):
         self.model = model
         self.data = data
-        self.observer = observer
 
     def snapshot(self, label: str) -> None:
-        """Let the observer (frame recorder) see the current state."""
-        if self.observer is not None:
-            self.observer(label, self.model, self.data)
+        """Offer the current state to a frame recorder (`prsc run --video`)."""
+        snapshot(label, self.model, self.data)
 
     def wait(self, seconds: float) -> None:
         """Advance physics with the current controls."""

@@ -10,6 +10,8 @@ import mujoco
 import numpy as np
 from scipy import ndimage
 
+from prsc.backends.runner.rendering import OffscreenRenderer
+
 # Perception images are rendered smaller than the camera's nominal resolution (same aspect
 # and field of view, so the same intrinsics up to scale): it keeps rendering cheap.
 PERCEPTION_WIDTH = 320
@@ -116,23 +118,16 @@ class CeilingCamera:
         if self.camera_id < 0:
             raise KeyError(f"camera {camera_name!r} not in the MJCF")
         self.intrinsics = intrinsics_for(model, self.camera_id, width, height)
-        self._renderer = mujoco.Renderer(model, height=height, width=width)
+        self._renderer = OffscreenRenderer(model, width, height)
 
     def capture(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """An RGB image (H x W x 3, uint8) and a metric z-depth image (H x W, metres)."""
-        self._renderer.disable_depth_rendering()
-        self._renderer.update_scene(data, camera=self.camera_id)
-        rgb = self._renderer.render().copy()
-        self._renderer.enable_depth_rendering()
-        self._renderer.update_scene(data, camera=self.camera_id)
-        depth = self._renderer.render().copy()
-        self._renderer.disable_depth_rendering()
-        return rgb, depth
+        return self._renderer.rgb(data, self.camera_id), self._renderer.depth(data, self.camera_id)
 
     def pose(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """World position and rotation matrix (columns = camera axes) of the camera."""
         return data.cam_xpos[self.camera_id].copy(), data.cam_xmat[self.camera_id].reshape(3, 3).copy()
 
     def close(self) -> None:
-        """Release the GL context."""
+        """Release the model's render context."""
         self._renderer.close()

@@ -1,16 +1,17 @@
-"""Results of a batch: results.jsonl, the terminal summary table and the two plots."""
+"""Results of a campaign: results.jsonl records, the terminal summary table and the plots.
+
+A record is one results.jsonl object (a dict). Outcomes are listed in the order the
+controller declares them, then any others (`error`, `timeout`, labels it did not declare)
+in the order they first appear."""
 
 from __future__ import annotations
 
-import json
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from prsc.backends.files import atomic_write
-from prsc.backends.runner.episode import OUTCOMES, EpisodeResult
 from prsc.geometry.rotations import quat_to_matrix
 
 OUTCOME_COLOURS = {
@@ -19,24 +20,33 @@ OUTCOME_COLOURS = {
     "no_path": "#ff7f0e",
     "poor_grip": "#d62728",
     "other": "#7f7f7f",
+    "error": "#000000",
+    "timeout": "#bcbd22",
 }
 
 
-def write_results(results: Sequence[EpisodeResult], path: Path) -> Path:
-    """Write results.jsonl (one episode per line, in index order)."""
-    lines = [json.dumps(r.to_json(), separators=(", ", ": ")) for r in sorted(results, key=lambda r: r.index)]
-    atomic_write(path, "\n".join(lines) + ("\n" if lines else ""))
-    return path
+def outcome_order(records: Sequence[dict], declared: Sequence[str] = ()) -> list[str]:
+    """Declared outcomes first, then the others in order of first appearance."""
+    return list(dict.fromkeys([*declared, *(r["outcome"] for r in records)]))
 
 
-def outcome_counts(results: Sequence[EpisodeResult]) -> list[tuple[str, int, float]]:
-    """(outcome, count, percent) for every outcome, in the fixed order."""
-    counts = Counter(r.outcome for r in results)
-    total = max(1, len(results))
-    return [(o, counts.get(o, 0), 100.0 * counts.get(o, 0) / total) for o in OUTCOMES]
+def outcome_counts(records: Sequence[dict], declared: Sequence[str] = ()) -> list[tuple[str, int, float]]:
+    """(outcome, count, percent) for every declared or seen outcome."""
+    counts = Counter(r["outcome"] for r in records)
+    total = max(1, len(records))
+    return [(o, counts.get(o, 0), 100.0 * counts.get(o, 0) / total) for o in outcome_order(records, declared)]
 
 
-def summary_table(results: Sequence[EpisodeResult], title: str):
+def outcome_colour(outcome: str, order: Sequence[str]) -> str:
+    """A fixed colour for the handover's labels and `error`/`timeout`, else one from a palette."""
+    if outcome in OUTCOME_COLOURS:
+        return OUTCOME_COLOURS[outcome]
+    palette = ("#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22", "#aec7e8", "#ffbb78", "#98df8a")
+    others = [o for o in order if o not in OUTCOME_COLOURS]
+    return palette[others.index(outcome) % len(palette)]
+
+
+def summary_table(records: Sequence[dict], title: str, declared: Sequence[str] = ()):
     """A rich Table of outcome, count and percent."""
     from rich.table import Table
 
@@ -44,10 +54,10 @@ def summary_table(results: Sequence[EpisodeResult], title: str):
     table.add_column("outcome")
     table.add_column("count", justify="right")
     table.add_column("percent", justify="right")
-    for outcome, count, percent in outcome_counts(results):
+    for outcome, count, percent in outcome_counts(records, declared):
         table.add_row(outcome, str(count), f"{percent:.0f}%")
     table.add_section()
-    table.add_row("total", str(len(results)), "100%")
+    table.add_row("total", str(len(records)), "100%")
     return table
 
 
@@ -68,12 +78,13 @@ def _save(fig, path: Path) -> Path:
     return path
 
 
-def plot_outcomes(results: Sequence[EpisodeResult], path: Path, title: str) -> Path:
+def plot_outcomes(records: Sequence[dict], path: Path, title: str, declared: Sequence[str] = ()) -> Path:
     """Bar chart of outcome counts."""
     plt = _pyplot()
-    rows = outcome_counts(results)
+    rows = outcome_counts(records, declared)
+    order = [o for o, _, _ in rows]
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
-    bars = ax.bar([o for o, _, _ in rows], [c for _, c, _ in rows], color=[OUTCOME_COLOURS[o] for o, _, _ in rows])
+    bars = ax.bar(order, [c for _, c, _ in rows], color=[outcome_colour(o, order) for o in order])
     for bar, (_, count, percent) in zip(bars, rows):
         ax.annotate(f"{count} ({percent:.0f}%)", (bar.get_x() + bar.get_width() / 2, bar.get_height()),
                     ha="center", va="bottom", fontsize=8)
@@ -86,24 +97,28 @@ def plot_outcomes(results: Sequence[EpisodeResult], path: Path, title: str) -> P
     return path
 
 
-def plot_cube_map(results: Sequence[EpisodeResult], source_trays: Sequence[dict], path: Path, title: str) -> Path:
-    """Top-down maps of the cube's initial position coloured by outcome: world and tray frames."""
+def plot_cube_map(records: Sequence[dict], source_trays: Sequence[dict], path: Path, title: str) -> Path:
+    """Top-down maps of the cube's initial position coloured by outcome: world and tray frames.
+
+    Records without `cube_initial` (an `error` or `timeout`) are left out."""
     plt = _pyplot()
     fig, (world, local) = plt.subplots(1, 2, figsize=(10, 4.6))
-    trays = {int(r.index): t for r, t in zip(results, source_trays)}
-    for outcome in OUTCOMES:
-        chosen = [r for r in results if r.outcome == outcome]
+    trays = {int(r["index"]): t for r, t in zip(records, source_trays)}
+    order = outcome_order(records)
+    for outcome in order:
+        chosen = [r for r in records if r["outcome"] == outcome and r.get("cube_initial")]
         if not chosen:
             continue
-        xy = np.array([r.cube_initial[:2] for r in chosen])
-        world.scatter(xy[:, 0], xy[:, 1], s=18, color=OUTCOME_COLOURS[outcome], label=outcome)
+        colour = outcome_colour(outcome, order)
+        xy = np.array([r["cube_initial"][:2] for r in chosen])
+        world.scatter(xy[:, 0], xy[:, 1], s=18, color=colour, label=outcome)
         rel = []
         for r in chosen:
-            tray = trays[int(r.index)]
+            tray = trays[int(r["index"])]
             rot = quat_to_matrix(tray["quaternion"])
-            rel.append((rot.T @ (np.asarray(r.cube_initial) - np.asarray(tray["position"], float)))[:2])
+            rel.append((rot.T @ (np.asarray(r["cube_initial"]) - np.asarray(tray["position"], float)))[:2])
         rel = np.array(rel)
-        local.scatter(rel[:, 0], rel[:, 1], s=18, color=OUTCOME_COLOURS[outcome], label=outcome)
+        local.scatter(rel[:, 0], rel[:, 1], s=18, color=colour, label=outcome)
     if source_trays:
         w, l = np.median([t["dimensions"][:2] for t in source_trays], axis=0)
         local.add_patch(plt.Rectangle((-w / 2, -l / 2), w, l, fill=False, lw=1.0, color="black"))

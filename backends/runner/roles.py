@@ -30,6 +30,19 @@ def footprint_distance(box: dict, point) -> float:
     return float(np.linalg.norm(outside))
 
 
+def objects_by_class(scene: dict, wanted: tuple[str, ...]) -> dict[str, list[dict]]:
+    """The scene's objects of each wanted class: an object counts for the first class of its
+    lineage (its class, then its ancestors in the scene's `classes` map) that is wanted."""
+    ancestry = scene.get("classes") or {}
+    found: dict[str, list[dict]] = {cls: [] for cls in wanted}
+    for obj in scene.get("objects", []):
+        lineage = [obj.get("class"), *ancestry.get(obj.get("class"), [])]
+        role = next((cls for cls in lineage if cls in wanted), None)
+        if role is not None:
+            found[role].append(obj)
+    return found
+
+
 def find_roles(scene: dict) -> Roles:
     """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera.
 
@@ -37,12 +50,7 @@ def find_roles(scene: dict) -> Roles:
     map, e.g. `RedCube(Cube)`) is the role's class.
     """
     wanted = {"Robot": 2, "Tray": 2, "Cube": 1, "Camera": 1}
-    ancestry = scene.get("classes") or {}
-    by_class: dict[str, list[dict]] = {}
-    for obj in scene.get("objects", []):
-        lineage = [obj.get("class"), *ancestry.get(obj.get("class"), [])]
-        role = next((cls for cls in lineage if cls in wanted), obj.get("class"))
-        by_class.setdefault(role, []).append(obj)
+    by_class = objects_by_class(scene, tuple(wanted))
     problems = []
     for cls, count in wanted.items():
         found = len(by_class.get(cls, []))

@@ -1,6 +1,7 @@
 """`prsc compile`: sample scenes of a spec and write them in simulator formats.
 
     prsc compile FILE --target mjcf,urdf -n 100 --seed 0 -o out [--jobs 2] [-I DIR]
+                 [--executor local|ray [--address ADDR]]
 
 writes under `out/<spec stem>/` one file (or bundle folder) per scene and target, named by
 the zero-padded scene index (`mjcf/00007.xml`, `urdf/00007/`, ...), the shared assets
@@ -16,7 +17,6 @@ import argparse
 import functools
 import hashlib
 import json
-import multiprocessing
 import os
 import shutil
 import sys
@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
+from prsc.commands.executors import Executor, LocalExecutor, add_executor_arguments, make_executor
 from prsc.commands.outputs import write_error
 from prsc.errors import PrscError, Span
 
@@ -45,6 +46,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("-o", "--output", default="out", help="output folder (default out)")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    add_executor_arguments(parser)
 
 
 # ------------------------------------------------------------------ scene sources
@@ -122,6 +124,7 @@ class Job:
     width: int
     scenes: list[dict] | None = None  # given scene JSON, or None to sample the spec
     include_dirs: tuple[str, ...] = ()  # --include: a worker compiling the spec again resolves the same imports
+    sources: str = ""  # digest of the spec and its imports: a worker's cached sampler is for these sources
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
     def scene(self, index: int) -> dict:
@@ -191,22 +194,25 @@ def render_one(job: Job, index: int) -> tuple[int, dict[str, str], list[str]]:
 
 # ------------------------------------------------------------------ workers
 
-_worker_job: Job | None = None
-
-
-def _worker_init(job: Job) -> None:
-    global _worker_job
-    _worker_job = job
-
-
-def _worker_render(index: int) -> tuple[str, Any]:
+def _worker_render(job: Job, index: int) -> tuple[str, Any]:
     """Worker entry: ('ok', result) or ('error', (message, span, notes)) so errors cross process lines."""
     try:
-        return "ok", render_one(_worker_job, index)
+        return "ok", render_one(_worker_copy(job), index)
     except PrscError as error:
         return "error", (error.message, error.span, error.notes)  # parts: the exception does not pickle whole
     except OSError as error:
         return "error", (write_error(error).message, None, ())
+
+
+_worker_jobs: dict[tuple, Job] = {}
+
+
+def _worker_copy(job: Job) -> Job:
+    """The worker's own copy of a job, so its sampler is compiled once per worker, not per scene."""
+    if job._sampler is not None or job.scenes is not None:
+        return job  # forked from the driver with its sampler, or given scenes: nothing to compile
+    key = (job.spec, job.seed, job.targets, job.root, job.width, job.include_dirs, job.sources)
+    return _worker_jobs.setdefault(key, job)
 
 
 def _run_serial(job: Job, indices: list[int], done: Callable[[tuple[int, dict, list[str]]], None]) -> None:
@@ -214,21 +220,15 @@ def _run_serial(job: Job, indices: list[int], done: Callable[[tuple[int, dict, l
         done(render_one(job, index))
 
 
-def _run_parallel(job: Job, indices: list[int], jobs: int, done: Callable[[tuple[int, dict, list[str]]], None]) -> None:
-    context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    chunk = max(1, min(16, len(indices) // (jobs * 8) or 1))
-    pool = context.Pool(jobs, initializer=_worker_init, initargs=(job,))
-    try:
-        for status, value in pool.imap_unordered(_worker_render, indices, chunksize=chunk):
-            if status == "error":
-                raise PrscError(*value)
-            done(value)
-        pool.close()
-    except BaseException:
-        pool.terminate()
-        raise
-    finally:
-        pool.join()
+def _run_parallel(job: Job, indices: list[int], executor: Executor,
+                  done: Callable[[tuple[int, dict, list[str]]], None]) -> None:
+    def collect(answer: tuple[str, Any]) -> None:
+        status, value = answer
+        if status == "error":
+            raise PrscError(*value)
+        done(value)
+
+    executor.map(_worker_render, job, indices, collect)
 
 
 # ------------------------------------------------------------------ output folder
@@ -315,11 +315,12 @@ def _progress(total: int):
 
 
 def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
-                   include_dirs: Sequence[str] = ()) -> Path:
+                   include_dirs: Sequence[str] = (), executor: Executor | None = None) -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
-    (--include) are searched for a spec's imports."""
+    (--include) are searched for a spec's imports. `executor` (default: `jobs` forked
+    local processes) runs the scenes."""
     from prsc.backends import TARGETS
 
     unknown = [t for t in targets if t not in TARGETS]
@@ -377,7 +378,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             if isinstance(scene, dict) and isinstance(scene.get("index"), int):
                 entries[scene["index"]] = {k: v for k, v in (scene.get("files") or {}).items() if (root / v).exists()}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
-              include_dirs=tuple(include_dirs), _sampler=sampler)
+              include_dirs=tuple(include_dirs), sources=sources_digest, _sampler=sampler)
     todo = [k for k in range(n) if not all((root / job.relative(t, k)).exists() for t in targets)]
     pending = set(todo)
     for k in range(n):
@@ -417,13 +418,16 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     try:
         if bar:
             bar.start()
-        if jobs > 1 and len(todo) > 1:
+        executor = executor or LocalExecutor(jobs, start="fork")
+        if isinstance(executor, LocalExecutor) and executor.jobs > 1 and len(todo) > 1:
             # The first scene in this process warms the per-process caches (robot
             # fragments, converted assets) that the forked workers then inherit.
             _run_serial(job, todo[:1], done)
-            _run_parallel(job, todo[1:], jobs, done)
-        else:
+            _run_parallel(job, todo[1:], executor, done)
+        elif isinstance(executor, LocalExecutor):
             _run_serial(job, todo, done)
+        else:
+            _run_parallel(job, todo, executor, done)
     except BaseException:
         _sweep_temporaries(root)
         if created is not None and not any(entries.values()):
@@ -444,5 +448,6 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
 def run(args: argparse.Namespace) -> int:
     """Entry point of `prsc compile`."""
     targets = list(dict.fromkeys(t.strip() for t in str(args.target).split(",") if t.strip()))
-    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, args.jobs, args.include)
+    executor = make_executor(args.executor, args.jobs, args.address, start="fork")
+    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, args.jobs, args.include, executor)
     return 0

@@ -1,4 +1,15 @@
-"""`prsc run`: simulate the Table-Cube handover controller in MuJoCo over sampled scenes."""
+"""`prsc run`: simulate a controller in MuJoCo over sampled scenes and classify the outcomes.
+
+    prsc run FILE -n 100 --seed 0 -o OUT [--controller TARGET] [--jobs J]
+             [--executor local|ray [--address ADDR]] [--max-sim-seconds S] [--video K]
+
+compiles the scenes as `prsc compile --target json,mjcf` does (under OUT/<stem>/), calls the
+controller once per scene with a fresh MjModel/MjData of its MJCF file, and appends each
+finished episode to OUT/results.jsonl. A killed campaign re-run with the same arguments
+skips the episodes already recorded; the finished file lists every episode in index order,
+identical (wall-clock times aside) to one an uninterrupted run writes. Then a summary
+table, OUT/outcomes.png and the controller's own plots.
+"""
 
 from __future__ import annotations
 
@@ -7,42 +18,55 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
+from prsc.commands.executors import add_executor_arguments
 from prsc.errors import PrscError
+
+RESULTS = "results.jsonl"
+CAMPAIGN = "campaign.json"
 
 
 def add_parser(subparsers) -> None:
     """Register `prsc run`."""
+    from prsc.backends.runner.controller import DEFAULT_CONTROLLER
+    from prsc.backends.runner.tasks import DEFAULT_MAX_SIM_SECONDS
+
     parser = subparsers.add_parser(
         "run",
-        help="run the handover controller in MuJoCo over N scenes and classify the outcomes",
-        description=(
-            "Sample N scenes (or read them from scene JSON), compile each to MJCF, run the "
-            "camera + IK handover controller headless, and write OUTPUT/results.jsonl, a summary "
-            "table and plots. The scenes must each hold two Robots (Pandas), two Trays, one Cube "
-            "and one Camera."
-        ),
+        help="run a controller in MuJoCo over N scenes and classify the outcomes",
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("file", metavar="FILE", help="a .prs spec, or scenes from `prsc sample` (.jsonl) or one scene (.json)")
     parser.add_argument("-n", type=int, default=None, help="number of scenes (default 10 for a spec, all for JSON)")
     parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default out/run-<name>)")
+    parser.add_argument("--controller", default=DEFAULT_CONTROLLER, metavar="TARGET",
+                        help="package.module:name or path/to/file.py:name, called as name(scene, model, data) "
+                             f"per episode (default {DEFAULT_CONTROLLER}, the two-arm handover)")
+    parser.add_argument("--max-sim-seconds", type=float, default=DEFAULT_MAX_SIM_SECONDS, metavar="S",
+                        help=f"end an episode past S simulated seconds as outcome `timeout` (default {DEFAULT_MAX_SIM_SECONDS:g})")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
+    add_executor_arguments(parser)
     parser.add_argument("--video", type=int, default=0, metavar="K",
-                        help="write a frame strip (PNG) of each of the first K failures")
+                        help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
 
 
-def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int,
-             include_dirs: Sequence[str] = ()) -> list[tuple[dict, Path]]:
-    """Compile the scenes exactly as `prsc compile --target json,mjcf` does; (scene, MJCF path) pairs."""
-    from prsc.commands.compile import MANIFEST, compile_scenes
+def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: Sequence[str]) -> list[dict]:
+    """The scenes a controller's `check` sees before anything is written: every scene of a JSON
+    input, the first of a spec (all scenes of a spec have the same objects and classes)."""
+    from prsc.commands.compile import _read_scene_file, _spec_sampler
 
-    is_json = source.suffix in (".json", ".jsonl")
-    if count is None:
-        count = 0 if is_json else 10  # 0: every scene of a JSON file
-    root = compile_scenes(str(source), ["json", "mjcf"], count, seed, str(out), jobs, include_dirs)
+    if source.suffix in (".json", ".jsonl"):
+        return _read_scene_file(source)[:count or None]
+    return [_spec_sampler(str(source), seed, include_dirs)(0)]
+
+
+def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
+    """(scene, MJCF path) of every compiled scene, in index order."""
+    from prsc.commands.compile import MANIFEST
+
     manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
     pairs = []
     for entry in sorted(manifest["scenes"], key=lambda e: e["index"]):
@@ -53,24 +77,75 @@ def _compile(source: Path, count: int | None, seed: int, out: Path, jobs: int,
     return pairs
 
 
-def _check_roles(source: Path, count: int | None, seed: int, include_dirs: Sequence[str] = ()) -> None:
-    """Refuse scenes that are not handover scenes before anything is compiled or written."""
-    from prsc.backends.runner.roles import find_roles
-    from prsc.commands.compile import _read_scene_file, _spec_sampler
+def _campaign_key(root: Path, args: argparse.Namespace, controller_digest: str) -> dict:
+    """What makes two runs the same campaign: the compiled scenes, the controller and its limit."""
+    from prsc.commands.compile import MANIFEST
 
-    if source.suffix in (".json", ".jsonl"):
-        scenes = _read_scene_file(source)[:count]
-    else:
-        # Every scene of a spec has the same objects and classes: its first one tells.
-        scenes = [_spec_sampler(str(source), seed, include_dirs)(0)]
-    for scene in scenes:
-        find_roles(scene)
+    manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        prsc_version = version("prsc")
+    except PackageNotFoundError:
+        prsc_version = "unknown"
+    return {"prsc": prsc_version, "spec_sha256": manifest["spec_sha256"], "sources_sha256": manifest["sources_sha256"],
+            "seed": args.seed, "controller": args.controller, "controller_sha256": controller_digest,
+            "max_sim_seconds": args.max_sim_seconds}
 
 
-def run(args: argparse.Namespace) -> int:
-    """Run the episodes and report; exit code 0 whatever the outcomes."""
-    from rich.console import Console
+def _recorded(out: Path, campaign: dict) -> dict[int, dict]:
+    """Episodes already in OUT/results.jsonl from the same campaign, by index (a torn last line is dropped)."""
+    results, marker = out / RESULTS, out / CAMPAIGN
+    try:
+        same = json.loads(marker.read_text(encoding="utf-8")) == campaign
+    except (OSError, ValueError):
+        same = False
+    if not same or not results.is_file():
+        return {}
+    done: dict[int, dict] = {}
+    for line in results.read_text(encoding="utf-8", errors="replace").splitlines():
+        try:
+            record = json.loads(line)
+            done[int(record["index"])] = record
+        except (ValueError, KeyError, TypeError):
+            continue  # the line a kill cut short
+    return done
 
+
+def _line(record: dict) -> str:
+    return json.dumps(record, separators=(", ", ": "))
+
+
+class _Appender:
+    """Appends each finished episode to results.jsonl at once (flushed), so a kill loses none."""
+
+    def __init__(self, path: Path, records: dict[int, dict]):
+        self.path = path
+        self.records = records
+        self.fault: str | None = None
+        self._file = open(path, "a", encoding="utf-8")
+
+    def __call__(self, answer: tuple[str, Any]) -> None:
+        status, value = answer
+        if status == "fault":
+            from prsc.backends.runner.faults import InfrastructureError
+
+            raise InfrastructureError(value)
+        record = value.to_json()
+        self.records[record["index"]] = record
+        try:
+            self._file.write(_line(record) + "\n")
+            self._file.flush()
+        except OSError as error:
+            from prsc.commands.outputs import write_error
+
+            raise write_error(error, self.path) from None
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def _validate(args: argparse.Namespace) -> None:
     if args.n is not None and args.n < 1:
         raise PrscError(f"-n must be >= 1, got {args.n}")
     if args.jobs < 1:
@@ -79,50 +154,119 @@ def run(args: argparse.Namespace) -> int:
         raise PrscError(f"--video must be >= 0, got {args.video}")
     if args.seed < 0:
         raise PrscError(f"--seed must be >= 0, got {args.seed}")
-    source = Path(args.file)
-    _check_roles(source, args.n, args.seed, args.include)
-    console = Console(stderr=True)
-    from prsc.backends.runner.batch import EpisodeTask, choose_gl_backend, run_tasks
-    from prsc.backends.runner.frames import record_episode, write_strip
-    from prsc.backends.runner.report import plot_cube_map, plot_outcomes, summary_table, write_results
-    from prsc.backends.runner.roles import find_roles
+    if not args.max_sim_seconds > 0:
+        raise PrscError(f"--max-sim-seconds must be > 0, got {args.max_sim_seconds:g}")
 
-    choose_gl_backend()
+
+def run(args: argparse.Namespace) -> int:
+    """Run the episodes and report; exit code 0 whatever the outcomes, 2 on an infrastructure fault."""
+    _validate(args)
+    from prsc.backends.runner.gl import choose_gl_backend
+
+    # Before anything imports mujoco: MuJoCo fixes its GL backend at import.
+    gl_backend = choose_gl_backend()
+    from rich.console import Console
+
+    from prsc.backends.files import atomic_write
+    from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
+    from prsc.backends.runner.tasks import EpisodeTask
+    from prsc.backends.runner.worker import WorkerConfig, run_task
+    from prsc.commands.compile import compile_scenes
+    from prsc.commands.executors import make_executor
+
+    source = Path(args.file)
+    controller_ref = parse_target(args.controller)
+    controller = load_controller(controller_ref)
+    declared = declared_outcomes(controller)
+    executor = make_executor(args.executor, args.jobs, args.address, start="spawn")
+    check = getattr(controller, "check", None)
+    if check is not None:
+        for scene in _scenes_to_check(source, args.n, args.seed, args.include):
+            check(scene)  # before anything is compiled or written
+    console = Console(stderr=True)
     out = args.output or Path("out") / f"run-{source.stem}"
     started = time.perf_counter()
     # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
-    pairs = _compile(source, args.n, args.seed, out, args.jobs, args.include)
-    roles = [find_roles(scene) for scene, _ in pairs]  # a scene without the roles stops here
-    tasks = [EpisodeTask(scene, str(mjcf), int(scene.get("seed", args.seed))) for scene, mjcf in pairs]
+    is_json = source.suffix in (".json", ".jsonl")
+    count = args.n if args.n is not None else (0 if is_json else 10)
+    root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), args.jobs, args.include,
+                          make_executor(args.executor, args.jobs, args.address, start="fork"))
+    pairs = _compiled(root, count)
+    scenes = [scene for scene, _ in pairs]
+    if check is not None:
+        for scene in scenes:
+            check(scene)
+    tasks = [EpisodeTask(k, scene, str(mjcf), int(scene.get("seed", args.seed)), controller_ref, args.max_sim_seconds)
+             for k, (scene, mjcf) in enumerate(pairs)]
     compiled = time.perf_counter()
+
+    campaign = _campaign_key(root, args, controller_ref.digest)
+    records = {k: r for k, r in _recorded(out, campaign).items() if k < len(tasks)}
+    todo = [t for t in tasks if t.index not in records]
+    atomic_write(out / CAMPAIGN, json.dumps(campaign, indent=1) + "\n")
+    # Start the file from the recorded episodes of this campaign only (in index order).
+    atomic_write(out / RESULTS, "".join(_line(records[k]) + "\n" for k in sorted(records)))
+    if len(todo) < len(tasks):
+        console.print(f"resuming: {len(tasks) - len(todo)} of {len(tasks)} episodes already in {out / RESULTS}")
 
     from rich.progress import Progress
 
-    with Progress(console=console, transient=True) as progress:
-        bar = progress.add_task("episodes", total=len(tasks))
-        results = run_tasks(tasks, args.jobs, on_result=lambda _: progress.advance(bar))
-    finished = time.perf_counter()
+    appender = _Appender(out / RESULTS, records)
+    try:
+        with Progress(console=console, transient=True) as progress:
+            bar = progress.add_task("episodes", total=len(todo))
 
-    out.mkdir(parents=True, exist_ok=True)
-    write_results(results, out / "results.jsonl")
-    title = f"{source.name}: {len(results)} episodes, seed {args.seed}"
-    plot_outcomes(results, out / "outcomes.png", title)
-    plot_cube_map(results, [r.source_tray for r in roles], out / "cube_map.png", title)
-    failures = [(task, result) for task, result in zip(tasks, results) if result.outcome != "success"]
-    for stale in (out / "failures").glob("episode_*.png"):
-        stale.unlink()  # strips of an earlier run into the same folder
-    for task, result in failures[: args.video]:
-        again, frames = record_episode(task.scene, task.mjcf_path, task.seed)
-        note = "" if again.outcome == result.outcome else f" (re-run gave {again.outcome}!)"
-        write_strip(frames, f"episode {result.index}: {result.outcome}{note}: {result.reason} "
-                            "(overview from the robots' front: the left robot is on the right)",
-                    out / "failures" / f"episode_{result.index:04d}_{result.outcome}.png")
+            def finished(answer: tuple[str, Any]) -> None:
+                appender(answer)
+                progress.advance(bar)
 
-    Console().print(summary_table(results, title))
-    console.print(
-        f"compile {compiled - started:.1f} s, episodes {finished - compiled:.1f} s "
-        f"({(finished - compiled) / max(1, len(results)):.2f} s each with {args.jobs} job(s)); "
-        f"results in {out}/results.jsonl"
-    )
+            cpu_before = _cpu_seconds()
+            executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=args.jobs > 1 or args.executor == "ray"),
+                         todo, finished)
+            cpu_used = _cpu_seconds() - cpu_before
+    finally:
+        appender.close()
+    finished_at = time.perf_counter()
+    ordered = [records[k] for k in sorted(records)]
+    atomic_write(out / RESULTS, "".join(_line(r) + "\n" for r in ordered))  # index order, as a clean run writes
+
+    title = f"{source.name}: {len(ordered)} episodes, seed {args.seed}"
+    from prsc.backends.runner.report import plot_outcomes, summary_table
+
+    plot_outcomes(ordered, out / "outcomes.png", title, declared)
+    report = getattr(controller, "report", None)
+    if report is not None:
+        report(ordered, scenes, out, title)
+    _write_strips(tasks, ordered, out, args.video)
+
+    Console().print(summary_table(ordered, title, declared))
+    episodes = f"{len(todo)} episodes {finished_at - compiled:.1f} s"
+    if todo and args.executor == "local":
+        episodes += f", {cpu_used / len(todo):.2f} CPU s each"
+    console.print(f"compile {compiled - started:.1f} s, {episodes} ({args.jobs} job(s), {args.executor}); "
+                  f"results in {out / RESULTS}")
     sys.stdout.flush()
     return 0
+
+
+def _cpu_seconds() -> float:
+    """CPU time of this process and its finished children (local workers only)."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def _write_strips(tasks: list, records: list[dict], out: Path, count: int) -> None:
+    """Frame strips of the first `count` episodes whose outcome is not `success` (re-run while recording)."""
+    from prsc.backends.runner.frames import record_episode, write_strip
+
+    for stale in (out / "failures").glob("episode_*.png"):
+        stale.unlink()  # strips of an earlier run into the same folder
+    failures = [(t, r) for t, r in zip(tasks, records) if r["outcome"] != "success"]
+    for task, record in failures[:count]:
+        again, frames = record_episode(task, record["sim_seconds"])
+        note = "" if again.outcome == record["outcome"] else f" (re-run gave {again.outcome}!)"
+        write_strip(frames, f"episode {record['index']}: {record['outcome']}{note}: {record['reason']} "
+                            "(overview from the +y side looking back: +x is on the left)",
+                    out / "failures" / f"episode_{record['index']:04d}_{record['outcome']}.png")

@@ -7,6 +7,8 @@ import json
 import os
 from pathlib import Path
 
+import textwrap
+
 import pytest
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -50,3 +52,39 @@ def variant():
         return out
 
     return variant_
+
+
+# The controller a user writes: three cubes on a table must stay put for a simulated second.
+STAY_PUT = textwrap.dedent('''
+    import mujoco
+    import numpy as np
+
+
+    class StayPut:
+        outcomes = ("still", "moved")
+
+        def __call__(self, scene, model, data):
+            names = [o["name"] for o in scene["objects"] if o["class"] == "Cube"]
+            ids = [model.body(name).id for name in names]
+            start = data.xpos[ids].copy()
+            while data.time < 1.0:
+                mujoco.mj_step(model, data)
+            drift = np.linalg.norm(data.xpos[ids] - start, axis=1)
+            worst = int(np.argmax(drift))
+            moved = drift[worst] > 0.005
+            reason = f"{names[worst]} moved {drift[worst] * 1000:.1f} mm" if moved else ""
+            return {"outcome": "moved" if moved else "still", "reason": reason,
+                    "drift_mm": [round(float(d) * 1000, 3) for d in drift]}
+
+
+    stay_put = StayPut()
+''')
+
+
+
+@pytest.fixture
+def stay_put(tmp_path) -> str:
+    """`--controller` target of STAY_PUT written to a temporary file."""
+    path = tmp_path / "stay_put.py"
+    path.write_text(STAY_PUT)
+    return f"{path}:stay_put"

@@ -8,8 +8,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prsc.backends.runner.episode import OUTCOMES, run_episode
+from prsc.backends.runner import DEFAULT_CONTROLLER, EpisodeTask, parse_target
+from prsc.backends.runner.handover import OUTCOMES
+from prsc.backends.runner.harness import run_episode as run_task
 from prsc.cli import main
+
+
+def run_episode(scene: dict, mjcf: Path):
+    """One handover episode of a compiled scene, as `prsc run` runs it."""
+    return run_task(EpisodeTask(0, scene, str(mjcf), 0, parse_target(DEFAULT_CONTROLLER)))
 
 
 @pytest.fixture
@@ -30,7 +37,7 @@ def test_nominal_scene_succeeds_and_is_deterministic(table_cube, compile_scene):
     assert first.outcome == "success", first.reason
     tray = next(o for o in table_cube["objects"] if o["name"] == "tr_2")
     half = np.asarray(tray["dimensions"][:2]) / 2
-    assert np.all(np.abs(np.asarray(first.cube_final[:2]) - tray["position"][:2]) < half)
+    assert np.all(np.abs(np.asarray(first.extra["cube_final"][:2]) - tray["position"][:2]) < half)
     second = run_episode(table_cube, mjcf)
     strip = lambda r: {k: v for k, v in r.to_json().items() if k != "wall_seconds"}  # noqa: E731
     assert strip(first) == strip(second)

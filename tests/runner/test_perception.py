@@ -2,21 +2,16 @@
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 
-from prsc.backends.runner.episode import HandoverEpisode, load_model
+from prsc.backends.runner.handover import HandoverEpisode
+from prsc.backends.runner.harness import fresh_data, load_model
 from prsc.backends.runner.perception import colour_mask, deproject, intrinsics_for, locate_cube
 
 
 def _settled(scene, mjcf):
     model = load_model(mjcf)
-    data = mujoco.MjData(model)
-    mujoco.mj_kinematics(model, data)
-    episode = HandoverEpisode(scene, model, data)
-    for arm in (episode.left, episode.right):
-        arm.reset_home(model, data)
-    mujoco.mj_forward(model, data)
+    episode = HandoverEpisode(scene, model, fresh_data(model))
     episode.sim.wait(0.3)
     return episode
 

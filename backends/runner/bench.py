@@ -1,0 +1,103 @@
+"""Benchmark of episodes: CPU seconds per episode and where they go (`make bench`).
+
+    python -m prsc.backends.runner.bench [--spec specs/table_cube.prs] [-n 21] [--controller TARGET]
+
+Compiles n scenes, runs the first episode to warm the worker (GL context, render context,
+IK models, MuJoCo's mesh cache), then the other n-1 in this process, as one worker of
+`prsc run` runs them. Reports CPU seconds per episode (process time, all threads: the
+GL rasteriser's too), episodes per CPU-second, and the CPU spent loading MJCF files,
+stepping (`mj_step`) and rendering.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+from collections import Counter
+from contextlib import contextmanager
+from pathlib import Path
+
+
+@contextmanager
+def _timed(module, name: str, totals: Counter, key: str):
+    """Add the process CPU time spent in `module.name` to totals[key] while inside."""
+    original = getattr(module, name)
+
+    def wrapper(*args, **kwargs):
+        start = time.process_time()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            totals[key] += time.process_time() - start
+
+    setattr(module, name, wrapper)
+    try:
+        yield
+    finally:
+        setattr(module, name, original)
+
+
+def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
+    """Run n episodes (the first as warm-up); CPU totals of the others."""
+    from prsc.backends.runner.gl import choose_gl_backend
+
+    choose_gl_backend()
+    import mujoco
+
+    from prsc.backends.runner import harness, rendering
+    from prsc.backends.runner.controller import parse_target
+    from prsc.backends.runner.tasks import EpisodeTask
+    from prsc.commands.compile import MANIFEST, compile_scenes
+
+    with tempfile.TemporaryDirectory(prefix="prsc-run-bench-") as tmp:
+        root = compile_scenes(spec, ["json", "mjcf"], n, 0, tmp, include_dirs=include_dirs)
+        entries = sorted(json.loads((root / MANIFEST).read_text())["scenes"], key=lambda e: e["index"])
+        ref = parse_target(controller)
+        tasks = [EpisodeTask(e["index"], json.loads((root / e["files"]["json"]).read_text()),
+                             str(root / e["files"]["mjcf"]), 0, ref) for e in entries]
+        harness.run_episode(tasks[0])
+        totals: Counter = Counter()
+        with _timed(harness, "load_model", totals, "load"), _timed(mujoco, "mj_step", totals, "step"), \
+                _timed(rendering.OffscreenRenderer, "rgb", totals, "render"), \
+                _timed(rendering.OffscreenRenderer, "depth", totals, "render"), \
+                _timed(rendering, "_render_context", totals, "render"):
+            cpu, wall = time.process_time(), time.perf_counter()
+            results = [harness.run_episode(task) for task in tasks[1:]]
+            totals["cpu"] = time.process_time() - cpu
+            totals["wall"] = time.perf_counter() - wall
+    totals["episodes"] = len(results)
+    totals["sim"] = sum(r.sim_seconds for r in results)
+    return {"totals": totals, "outcomes": Counter(r.outcome for r in results)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark and print the numbers."""
+    parser = argparse.ArgumentParser(prog="python -m prsc.backends.runner.bench", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--spec", default="specs/table_cube.prs")
+    parser.add_argument("-n", type=int, default=21, help="scenes (the first is the warm-up; default 21)")
+    parser.add_argument("--controller", default="prsc.backends.runner.handover:handover")
+    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR")
+    args = parser.parse_args(argv)
+    if args.n < 2:
+        parser.error("-n must be >= 2 (one warm-up episode, then the measured ones)")
+    found = bench(args.spec, args.n, args.controller, args.include)
+    t, episodes = found["totals"], found["totals"]["episodes"]
+    print(f"prsc episode benchmark: {episodes} episodes of {args.spec} after one warm-up, one worker, "
+          f"load average {os.getloadavg()[0]:.2f}")
+    print(f"  {t['cpu'] / episodes:.3f} CPU s per episode = {episodes / t['cpu']:.2f} episodes per CPU-second "
+          f"({t['wall'] / episodes:.3f} s wall each, {t['sim'] / episodes:.1f} simulated s each)")
+    other = t["cpu"] - t["load"] - t["step"] - t["render"]
+    print(f"  per episode: load {t['load'] / episodes:.3f}, mj_step {t['step'] / episodes:.3f} "
+          f"({t['sim'] / max(t['step'], 1e-9) / 0.002:,.0f} steps per CPU-second at a 2 ms step), "
+          f"render {t['render'] / episodes:.3f}, controller and the rest {other / episodes:.3f} CPU s")
+    print("  outcomes: " + ", ".join(f"{o} {c}" for o, c in found["outcomes"].most_common()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

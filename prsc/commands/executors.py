@@ -1,0 +1,171 @@
+"""Where a command's per-scene work runs: this machine's processes or a Ray cluster.
+
+`executor.map(fn, shared, items, on_result)` calls `fn(shared, item)` for every item and
+returns the results in item order; `on_result(result)` sees each as soon as it finishes
+(in completion order). `fn` must be a module-level function (workers import it by name);
+`shared` is sent to each worker once, not with every item. A worker keeps its process
+between items, so it may cache what it builds (GL contexts, compiled IK models).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import uuid
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from prsc.errors import PrscError
+
+EXECUTORS = ("local", "ray")
+
+
+class Executor(Protocol):
+    """Runs `fn(shared, item)` over items; results in item order."""
+
+    def map(self, fn: Callable[[Any, Any], Any], shared: Any, items: Sequence[Any],
+            on_result: Callable[[Any], None] | None = None) -> list[Any]: ...
+
+
+# ------------------------------------------------------------------ local processes
+
+_worker_fn: Callable[[Any, Any], Any] | None = None
+_worker_shared: Any = None
+
+
+def _local_init(fn: Callable[[Any, Any], Any], shared: Any) -> None:
+    global _worker_fn, _worker_shared
+    _worker_fn, _worker_shared = fn, shared
+
+
+def _local_call(numbered: tuple[int, Any]) -> tuple[int, Any]:
+    number, item = numbered
+    return number, _worker_fn(_worker_shared, item)
+
+
+@dataclass(frozen=True)
+class LocalExecutor:
+    """`jobs` worker processes on this machine (none: in this process when jobs is 1).
+
+    `start` is the multiprocessing start method: `fork` shares what the parent already
+    built; `spawn` gives each worker a clean process (its own GL context)."""
+
+    jobs: int = 1
+    start: str = "spawn"
+    tasks_per_worker: int | None = None  # replace a worker after this many items (bounds its memory)
+
+    def map(self, fn, shared, items, on_result=None):
+        """Run the items here (jobs 1) or in a process pool; results in item order."""
+        items = list(items)
+        results: list[Any] = [None] * len(items)
+        if self.jobs <= 1 or len(items) <= 1:
+            for k, item in enumerate(items):
+                results[k] = fn(shared, item)
+                if on_result is not None:
+                    on_result(results[k])
+            return results
+        method = self.start if self.start in multiprocessing.get_all_start_methods() else "spawn"
+        context = multiprocessing.get_context(method)
+        chunk = 1 if method == "spawn" else max(1, min(16, len(items) // (self.jobs * 8) or 1))
+        pool = context.Pool(min(self.jobs, len(items)), initializer=_local_init, initargs=(fn, shared),
+                            maxtasksperchild=self.tasks_per_worker)
+        try:
+            for number, result in pool.imap_unordered(_local_call, list(enumerate(items)), chunksize=chunk):
+                results[number] = result
+                if on_result is not None:
+                    on_result(result)
+            pool.close()
+        except BaseException:
+            pool.terminate()
+            raise
+        finally:
+            pool.join()
+        return results
+
+
+# ------------------------------------------------------------------ Ray
+
+_ray_shared: dict[str, Any] = {}  # per worker process: shared objects already fetched, by key
+
+
+def _ray_call(fn: Callable[[Any, Any], Any], key: str, boxed: list, item: Any) -> Any:
+    """A Ray task: fetch `shared` once per worker process (boxed, so Ray does not resolve it per task)."""
+    if key not in _ray_shared:
+        import ray
+
+        _ray_shared.clear()  # one campaign at a time per worker
+        _ray_shared[key] = ray.get(boxed[0])
+    return fn(_ray_shared[key], item)
+
+
+def _import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise PrscError("--executor ray needs Ray: pip install 'prsc[ray]' (or pip install ray)") from None
+    return ray
+
+
+@dataclass(frozen=True)
+class RayExecutor:
+    """One Ray task per item, on the cluster at `address` (None: a local cluster of `cpus` CPUs started
+    here, kept for the next map and stopped when this process exits; a Ray session already open in
+    this process is used as it is)."""
+
+    address: str | None = None
+    cpus: int | None = None
+
+    def map(self, fn, shared, items, on_result=None):
+        """Submit every item as a task; collect results as they finish; return them in item order."""
+        ray = _import_ray()
+        items = list(items)
+        if not ray.is_initialized():
+            try:
+                if self.address:
+                    ray.init(address=self.address, log_to_driver=False)
+                else:
+                    ray.init(num_cpus=self.cpus or os.cpu_count(), include_dashboard=False, log_to_driver=False)
+            except Exception as error:  # ConnectionError, TimeoutError, RuntimeError... all mean "no cluster"
+                raise PrscError(f"cannot start or reach a Ray cluster{f' at {self.address}' if self.address else ''}: "
+                                f"{type(error).__name__}: {error}") from None
+        remote = ray.remote(num_cpus=1)(_ray_call)
+        boxed = [ray.put(shared)]
+        key = uuid.uuid4().hex
+        pending = {remote.remote(fn, key, boxed, item): k for k, item in enumerate(items)}
+        results: list[Any] = [None] * len(items)
+        try:
+            while pending:
+                done, _ = ray.wait(list(pending), num_returns=1)
+                for ref in done:
+                    number = pending.pop(ref)
+                    results[number] = ray.get(ref)
+                    if on_result is not None:
+                        on_result(results[number])
+        except BaseException:
+            for ref in pending:
+                ray.cancel(ref, force=True)
+            raise
+        return results
+
+
+def make_executor(kind: str, jobs: int = 1, address: str | None = None, start: str = "spawn",
+                  tasks_per_worker: int | None = None) -> Executor:
+    """The executor `--executor KIND [--address A] [--jobs J]` asks for."""
+    if kind not in EXECUTORS:
+        raise PrscError(f"unknown executor {kind!r}; choose from {', '.join(EXECUTORS)}")
+    if address and kind != "ray":
+        raise PrscError("--address needs --executor ray")
+    if kind == "ray":
+        _import_ray()
+        return RayExecutor(address=address, cpus=jobs if jobs > 1 else None)
+    return LocalExecutor(jobs=jobs, start=start, tasks_per_worker=tasks_per_worker)
+
+
+def add_executor_arguments(parser: Any) -> None:
+    """--executor and --address, shared by `prsc run` and `prsc compile`."""
+    parser.add_argument("--executor", choices=EXECUTORS, default="local",
+                        help="where scenes run: local worker processes (default) or a Ray cluster")
+    parser.add_argument("--address", default=None, metavar="ADDR",
+                        help="with --executor ray: an existing cluster (e.g. ray://head:10001 or auto); "
+                             "default: start a local one")
