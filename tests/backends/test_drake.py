@@ -67,3 +67,24 @@ def test_drake_welds_a_fixed_robot_and_moves_its_joints(tmp_path):
     r1 = next(m for m in models if plant.GetModelInstanceName(m) == "r1")
     assert plant.num_positions(r1) == 9 and not plant.GetBodyByName("r1", r1).is_floating_base_body()
     assert plant.GetJointByName("r1_world_weld").type_name() == "weld"
+
+
+def test_pybullet_keeps_the_welded_robot_fixed(tmp_path):
+    """pybullet skips the world-level weld; the massless mount is what fixes the base there."""
+    import pybullet as p
+
+    root, scenes = _compiled(tmp_path, REPO / "specs" / "table_cube.prs", n=1)
+    client = p.connect(p.DIRECT)
+    try:
+        p.setGravity(0, 0, -9.81, physicsClientId=client)
+        bodies = {p.getBodyInfo(b, physicsClientId=client)[1].decode(): b
+                  for b in p.loadSDF(str(root / "sdf" / "00000.sdf"), physicsClientId=client)}
+        start = {n: p.getBasePositionAndOrientation(bodies[n], physicsClientId=client)[0] for n in ("r1", "r2")}
+        for _ in range(240):
+            p.stepSimulation(physicsClientId=client)
+        for name in ("r1", "r2"):
+            end = p.getBasePositionAndOrientation(bodies[name], physicsClientId=client)[0]
+            assert max(abs(a - b) for a, b in zip(start[name], end)) < 1e-9, f"{name} base moved in pybullet"
+            assert p.getNumJoints(bodies[name], physicsClientId=client) > 9
+    finally:
+        p.disconnect(client)
