@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 # Bump when the conversion changes: the cache key includes it.
-RECIPE_VERSION = "2"
+RECIPE_VERSION = "3"
 
 PANDA_BASE_YAW = math.pi / 2
 """Yaw (rad, about +z) from the URDF base frame (arm along +x) to the prsc base frame (+y)."""
@@ -238,11 +238,12 @@ def _urdf_text(tree: ET.ElementTree) -> str:
 
 
 def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
-    """Re-export each visual OBJ as binary STL in `folder`; map old path to new path.
+    """Re-export each visual OBJ as a plain OBJ in `folder`; map old path to new path.
 
     The shipped visual OBJs carry malformed texture coordinates that MuJoCo warns about on
-    every compile (and MuJoCo ignores their .mtl colours anyway); binary STL also parses
-    several times faster.
+    every compile (and MuJoCo ignores their .mtl colours anyway), so the copies keep only
+    vertices and faces. They stay OBJ because Drake's MuJoCo parser reads no other mesh
+    format (docs/backends.md).
     """
     import trimesh
 
@@ -254,9 +255,12 @@ def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
         source = Path(mesh.get("filename"))
         if "visual" not in source.parts:
             continue  # visuals that reuse a collision mesh are clean already
-        target = folder / "meshes" / f"{source.stem}.stl"
+        target = folder / "meshes" / f"{source.stem}.obj"
         loaded = trimesh.load(str(source), force="mesh", process=False)
-        _write_atomic(target, loaded.export(file_type="stl"))
+        text = trimesh.exchange.obj.export_obj(
+            loaded, include_normals=False, include_color=False, include_texture=False, write_texture=False
+        )
+        _write_atomic(target, text)
         mapping[str(source)] = str(target)
     return mapping
 

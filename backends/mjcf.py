@@ -3,9 +3,10 @@
 Layout (names the runner relies on):
 - a body per object named after it, at the scene pose (box centre); a free object has a
   free joint of the same name; geoms are named `<object>/<part>`;
-- a Robot with model "panda": the Panda MJCF attached with prefix `<object>/` in a frame
-  `<object>/mount` at the bottom centre of the box (so `r1/base`, `r1/joint1`, `r1/tcp`,
-  actuators `r1/joint1..7`, `r1/gripper`);
+- a Robot with model "panda": the Panda MJCF attached with prefix `<object>/`, its base
+  body `<object>/base` at the bottom centre of the box (so `r1/base`, `r1/joint1`, `r1/tcp`,
+  actuators `r1/joint1..7`, `r1/gripper`). The offset is the base body's own `pos`, not a
+  `<frame>`: Drake's MuJoCo parser skips frames, and with them the whole robot;
 - a camera object: a camera named after the object looking along the object's +y
   (image up = its +z) with the object's fovy and resolution;
 - a keyframe `home`: free bodies at their scene poses, robot arms at their home posture.
@@ -45,7 +46,12 @@ class RobotFragment:
     """The MJCF of one attached robot as serialised text per section, ready to splice."""
 
     sections: dict[str, str]  # section tag -> its child elements as XML text
-    base: str  # the robot's root body as XML text
+    base: str  # the robot's root body as XML text, at the origin of its parent
+
+    def base_at(self, position) -> str:
+        """The root body's XML text placed at `position` in its parent body."""
+        head, tail = self.base.split(">", 1)
+        return f'{head} pos="{nums(position)}">{tail}'
     qpos: list[str]
     ctrl: list[str]
 
@@ -95,6 +101,8 @@ def _robot_fragment(robot: str, prefix: str, store: AssetStore, folder: Path) ->
                 element.set("file", relative_path(store.robot_file(robot, element.get("file")), folder))
         sections[section.tag] = "\n".join(element_text(e) for e in section)
     base = next(root.find("worldbody").iter("body"))
+    if base.get("pos") is not None:
+        raise ValueError(f"the {robot} base body has a pos of its own; the mount offset would replace it")
     return RobotFragment(sections, element_text(base), [num(v) for v in home_qpos], [num(v) for v in home_ctrl])
 
 
@@ -214,9 +222,6 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
                 resolution=[body.camera.width, body.camera.height],
             )
             exact[("camera", obj.name)] = {"quat": nums(CAMERA_QUAT_NEG_Z), "fovy": num(body.camera.fovy)}
-        if body.robot is not None:
-            b.add_frame(name=f"{obj.name}/mount", pos=list(body.mount_position))
-            exact[("frame", f"{obj.name}/mount")] = {"pos": nums(body.mount_position)}
     return spec, exact
 
 
@@ -264,7 +269,7 @@ def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
     qpos: list[str] = []
     ctrl: list[str] = []
     pieces: list[str] = []
-    mounts = {f.get("name"): f for f in root.iter("frame")}
+    holders = {b.get("name"): b for b in root.find("worldbody").findall("body")}
     for body in bodies:
         obj = body.obj
         if not body.fixed:
@@ -272,7 +277,7 @@ def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
         if body.robot is None:
             continue
         fragment = robot_fragment(body.robot, f"{obj.name}/", store, folder)
-        placeholder(mounts[f"{obj.name}/mount"], pieces, fragment.base)
+        placeholder(holders[obj.name], pieces, fragment.base_at(body.mount_position))
         for tag, text in fragment.sections.items():
             # Robot default classes become subclasses of the scene's top-level default.
             if text:

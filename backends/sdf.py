@@ -7,8 +7,12 @@ objects are `<static>1</static>` models (pybullet reads the flag with atoi, so n
 "true"). A robot is a model whose first link, named after the object, is a massless mount
 at the box centre, welded by a fixed joint to the robot's base at the bottom centre; its
 links sit at the zero configuration and each joint axis is written in the joint (child
-link) frame, as in URDF. A fixed-base robot is a static model: pybullet cannot read a
-joint to "world" (in Gazebo a static model's joints do not move). A camera object carries a
+link) frame, as in URDF. A fixed-base robot is a non-static model welded to the world by a
+fixed joint written at world level (`//world/joint`, parent `world`, child `<robot>::<mount>`),
+and its mount link is massless. Each simulator reads that form: Drake and Gazebo weld the
+mount (a static model with moving joints is refused by Drake, and its joints do not move in
+Gazebo); pybullet skips world-level joints, and a base link of mass 0 is fixed in pybullet
+(it cannot parse a joint whose parent is "world" inside a model). A camera object carries a
 camera `<sensor>` looking along the object's +y.
 """
 
@@ -188,22 +192,33 @@ def _robot_links_text(robot: str, store_root: str, folder: str, mount: tuple[flo
 
 def _robot_model(world: ET.Element, body: Body, store: AssetStore, folder: Path, pieces: list[str]) -> None:
     """The robot as an SDF model at the object's pose; its first link, named after the
-    object, is the mount (massless, welded to the robot's base)."""
+    object, is the mount (welded to the robot's base, and to the world when fixed)."""
     obj = body.obj
     tree = _robot_tree(body.robot)
     if obj.name in {l.name for l in tree.links}:
         raise PrscError(f"robot object {obj.name!r} has the name of one of its {body.robot} links; rename it")
     model = ET.SubElement(world, "model", name=obj.name)
     _pose(model, obj.position, obj.quaternion)
-    # A fixed base is a static model: pybullet cannot parse a joint to "world".
-    ET.SubElement(model, "static").text = "1" if body.fixed else "0"
+    # Never static: Drake refuses a static model with moving joints (module docstring).
+    ET.SubElement(model, "static").text = "0"
     link = ET.SubElement(model, "link", name=obj.name)
-    _inertial(link, body.inertial.mass, body.inertial.com, body.inertial.tensor)
+    if body.fixed:
+        # Mass 0 is what fixes a base link in pybullet, which skips the world weld below.
+        _inertial(link, 0.0, (0.0, 0.0, 0.0), np.zeros((3, 3)))
+    else:
+        _inertial(link, body.inertial.mass, body.inertial.com, body.inertial.tensor)
     joint = ET.SubElement(model, "joint", name=f"{obj.name}_mount", type="fixed")
     ET.SubElement(joint, "parent").text = obj.name
     ET.SubElement(joint, "child").text = tree.root
     for text in _robot_links_text(body.robot, str(store.root), str(folder), body.mount_position):
         placeholder(model, pieces, text)
+
+
+def _world_weld(world: ET.Element, name: str) -> None:
+    """A world-level fixed joint from `world` to the mount link of robot model `name`."""
+    joint = ET.SubElement(world, "joint", name=f"{name}_world_weld", type="fixed")
+    ET.SubElement(joint, "parent").text = "world"
+    ET.SubElement(joint, "child").text = f"{name}::{name}"
 
 
 def _ground_model(world: ET.Element, name: str) -> None:
@@ -241,6 +256,9 @@ def sdf_text(scene: Scene, path: Path, store: AssetStore) -> str:
             _robot_model(world, body, store, folder, pieces)
         else:
             _parts_model(world, body, folder)
+    for body in bodies:
+        if body.robot is not None and body.fixed:
+            _world_weld(world, body.obj.name)
     return '<?xml version="1.0"?>\n' + serialise(root, pieces) + "\n"
 
 

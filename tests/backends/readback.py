@@ -214,3 +214,45 @@ def usd_poses(path: Path, scene: dict) -> dict[str, tuple]:
 
         out[o["name"]] = (np.array([m[3][0], m[3][1], m[3][2]]), matrix_to_quat(rot))
     return out
+
+
+# ------------------------------------------------------------------ Drake
+
+
+def drake_load(path: Path):
+    """pydrake's Parser loads a world (SDF or MJCF) into a finalised MultibodyPlant.
+
+    Returns the plant, its default context, and the scene bodies by object name (for an SDF
+    world the link named after the object in the model of that name; for MJCF the body).
+    """
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+
+    plant = MultibodyPlant(0.0)
+    models = Parser(plant).AddModels(str(path))
+    plant.Finalize()
+    return plant, plant.CreateDefaultContext(), models
+
+
+def drake_poses(plant, context, models, scene: dict) -> dict[str, tuple]:
+    """World pose of every object's body in a loaded Drake plant, and whether it floats."""
+    from prsc.geometry.rotations import matrix_to_quat
+
+    names = {plant.GetModelInstanceName(m): m for m in models}
+    out = {}
+    for o in scene["objects"]:
+        instance = names.get(o["name"], models[0])
+        body = plant.GetBodyByName(o["name"], instance)
+        pose = plant.EvalBodyPoseInWorld(context, body)
+        out[o["name"]] = (pose.translation(), matrix_to_quat(pose.rotation().matrix()))
+    return out
+
+
+def drake_floating(plant, models, scene: dict) -> dict[str, bool]:
+    """Whether each object's body is a free (floating-base) body in Drake."""
+    names = {plant.GetModelInstanceName(m): m for m in models}
+    out = {}
+    for o in scene["objects"]:
+        body = plant.GetBodyByName(o["name"], names.get(o["name"], models[0]))
+        out[o["name"]] = body.is_floating_base_body()
+    return out

@@ -341,7 +341,8 @@ def test_a_free_floating_robot_is_free_in_every_format(tmp_path):
     assert model.body_jntnum[model.body("arm").id] == 1 and model.body_subtreemass[model.body("arm").id] > 10
     _, drops = readback.urdf_bundle_load(root / "urdf" / "00000", visuals=False)
     readback.assert_free_fall(drops, scene)
-    assert "<static>0</static>" in (root / "sdf" / "00000.sdf").read_text()
+    sdf = (root / "sdf" / "00000.sdf").read_text()
+    assert "<static>0</static>" in sdf and "world_weld" not in sdf
     stage = Usd.Stage.Open(str(root / "usd" / "00000.usda"))
     weld = stage.GetPrimAtPath("/World/arm/mount/panda/joints/root_joint")
     assert weld.GetAttribute("physics:jointEnabled").Get() is False
