@@ -25,11 +25,12 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+
+from prsc.files import atomic_write
 
 # Bump when the conversion changes: the cache key includes it.
 RECIPE_VERSION = "2"
@@ -112,22 +113,6 @@ def _cache_dir() -> Path:
     digest.update(str(source.resolve()).encode())
     digest.update(source.read_bytes())
     return build_dir() / f"panda-{digest.hexdigest()[:12]}"
-
-
-def _write_atomic(path: Path, content: str | bytes) -> None:
-    """Write a file through a temporary file and a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        data = content.encode("utf-8") if isinstance(content, str) else content
-        with os.fdopen(handle, "wb") as out:
-            out.write(data)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _rpy_matrix(rpy: tuple[float, float, float]) -> np.ndarray:
@@ -255,8 +240,9 @@ def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
         if "visual" not in source.parts:
             continue  # visuals that reuse a collision mesh are clean already
         target = folder / "meshes" / f"{source.stem}.stl"
+        target.parent.mkdir(parents=True, exist_ok=True)
         loaded = trimesh.load(str(source), force="mesh", process=False)
-        _write_atomic(target, loaded.export(file_type="stl"))
+        atomic_write(target, loaded.export(file_type="stl"))
         mapping[str(source)] = str(target)
     return mapping
 
@@ -376,10 +362,11 @@ def _ensure_built() -> Path:
     if urdf_path.is_file() and mjcf_path.is_file():
         return folder
     tree = _converted_urdf()
-    _write_atomic(urdf_path, _urdf_text(tree))
+    folder.mkdir(parents=True, exist_ok=True)
+    atomic_write(urdf_path, _urdf_text(tree))
     spec = _mjcf_from_urdf(tree, _clean_visual_meshes(tree, folder))
     xml = spec.to_xml()
-    _write_atomic(mjcf_path, xml)
+    atomic_write(mjcf_path, xml)
     return folder
 
 
