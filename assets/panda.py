@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from prsc.assets.simulation import set_simulation_options
 from prsc.files import atomic_write
 
 # Bump when the conversion changes: the cache key includes it.
@@ -328,9 +329,7 @@ def _mjcf_from_urdf(urdf_tree: ET.ElementTree, visual_meshes: dict[str, str]):
             geom.rgba = [0.95, 0.95, 0.95, 1.0]
 
     spec.modelname = "panda"
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = 10.0
+    set_simulation_options(spec.option)
     for equality in spec.equalities:
         equality.name = "finger_mimic"
         equality.solref = [0.005, 1.0]

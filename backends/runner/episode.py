@@ -222,13 +222,8 @@ class HandoverEpisode:
 
 
 def load_model(mjcf_path: str | Path) -> mujoco.MjModel:
-    """Load a scene MJCF with the simulation options the controller is tuned for."""
-    model = mujoco.MjModel.from_xml_path(str(mjcf_path))
-    model.opt.timestep = 0.002
-    model.opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    model.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    model.opt.impratio = 10.0
-    return model
+    """Load a scene MJCF with the simulation options it was compiled with (prsc.assets.simulation)."""
+    return mujoco.MjModel.from_xml_path(str(mjcf_path))
 
 
 def run_episode(scene: dict, mjcf_path: str | Path, seed: int | None = None,
