@@ -22,11 +22,15 @@ class Span:
 class PrscError(Exception):
     """A user-facing error: reported as `path:line:col: error: message`, exit code 2."""
 
-    def __init__(self, message: str, span: Span | None = None, notes: tuple[tuple[str, Span | None], ...] = ()):
+    def __init__(self, message: str, span: Span | None = None, notes: tuple[tuple[str, Span | None], ...] = (),
+                 obj: str | None = None):
         super().__init__(message)
         self.message = message
         self.span = span
         self.notes = tuple(notes)
+        # The scene object at fault, when a later stage (a backend) knows no span: the
+        # command that has the spec's IR then reports the object's line.
+        self.obj = obj
 
 
 # Bounds on reading a source line for the caret: a line of /dev/zero or of a huge

@@ -58,6 +58,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("-o", "--output", default="out", help="output folder (default out)")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    parser.add_argument("--meshes-anywhere", action="store_true",
+                        help="let `with mesh` read absolute paths and paths outside the spec's and --include folders")
     parser.add_argument("--force", action="store_true",
                         help="replace the scenes of another spec or seed in the output folder (only files its manifest lists)")
 
@@ -140,6 +142,7 @@ class Job:
     # A file at one of this run's names that the manifest does not list: rewritten when the
     # folder's manifest is this run's (a kill between rename and record), else refused.
     adopt_unlisted: bool = True
+    meshes_anywhere: bool = False  # --meshes-anywhere
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
     def scene(self, index: int) -> dict:
@@ -187,7 +190,7 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
     from prsc.files import atomic_write, atomic_write_tree
 
     root = Path(job.root)
-    store = AssetStore(root / "assets")
+    store = AssetStore(root / "assets", job.include_dirs, job.meshes_anywhere)
     files: dict[str, str] = {}
     missing = []
     for target in job.targets:
@@ -262,9 +265,9 @@ def _worker_render(index: int) -> tuple[str, Any]:
     try:
         return "ok", render_one(_worker_job, index, _worker_listed)
     except PrscError as error:
-        return "error", (error.message, error.span, error.notes)  # parts: the exception does not pickle whole
+        return "error", (error.message, error.span, error.notes, error.obj)  # parts: the exception does not pickle whole
     except OSError as error:
-        return "error", (write_error(error).message, None, ())
+        return "error", (write_error(error).message, None, (), None)
 
 
 def _run_serial(job: Job, indices: Iterable[int], done: Callable[[tuple[int, dict, list[str]]], None],
@@ -456,12 +459,12 @@ def _progress(total: int):
 
 
 def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
-                   include_dirs: Sequence[str] = (), force: bool = False) -> Path:
+                   include_dirs: Sequence[str] = (), force: bool = False, meshes_anywhere: bool = False) -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
-    (--include) are searched for a spec's imports; `force` replaces the listed scenes of
-    another spec or seed."""
+    (--include) are searched for a spec's imports and meshes; `force` replaces the listed
+    scenes of another spec or seed; `meshes_anywhere` lets meshes come from any folder."""
     from prsc.backends import TARGETS
 
     unknown = [t for t in targets if t not in TARGETS]
@@ -477,6 +480,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         raise PrscError("the output folder path is empty")
     path = Path(file)
     root = _output_root(Path(output), path)
+    program: Any = None  # the spec's IR, for errors a backend reports by object
     if path.suffix in (".json", ".jsonl"):
         data = _read_input(path)
         scenes: list[dict] | None = _read_scene_file(path, data)
@@ -492,6 +496,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         from prsc.sampling import compile_sampler
 
         compiled = compile_sampler(str(file), include_dirs=include_dirs)
+        program = compiled.program
         sampler = functools.partial(compiled.scene, seed)
         data = _read_input(path)
         sources = hashlib.sha256(data)
@@ -507,14 +512,25 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     lock = _lock_folder(root)
     try:
         return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, data, sources, scenes,
-                               sampler, width, created)
+                               sampler, width, created, meshes_anywhere)
+    except PrscError as error:
+        raise _at_object(error, program) from None
     finally:
         os.close(lock)
 
 
+def _at_object(error: PrscError, program: Any) -> PrscError:
+    """A backend's error about an object, at the object's line in the spec (when there is one)."""
+    if error.span is not None or error.obj is None or program is None:
+        return error
+    decl = next((o for o in program.objects if o.name == error.obj), None)
+    return error if decl is None else PrscError(error.message, decl.span, error.notes)
+
+
 def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int, jobs: int,
                     include_dirs: Sequence[str], force: bool, data: bytes, sources: Any, scenes: list[dict] | None,
-                    sampler: Callable[[int], dict] | None, width: int, created: Path | None) -> Path:
+                    sampler: Callable[[int], dict] | None, width: int, created: Path | None,
+                    meshes_anywhere: bool) -> Path:
     """The part of compile_scenes that runs while this process holds the folder's lock."""
     from prsc.files import remove_stale_temporaries
 
@@ -533,7 +549,8 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         _remove_listed(root, entries)
         manifest, entries = None, {}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
-              include_dirs=tuple(include_dirs), adopt_unlisted=manifest is not None, _sampler=sampler)
+              include_dirs=tuple(include_dirs), adopt_unlisted=manifest is not None,
+              meshes_anywhere=meshes_anywhere, _sampler=sampler)
     listed = _Listed(root, {k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
@@ -624,5 +641,6 @@ class _Listed:
 def run(args: argparse.Namespace) -> int:
     """Entry point of `prsc compile`."""
     targets = list(dict.fromkeys(t.strip() for t in str(args.target).split(",") if t.strip()))
-    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, args.jobs, args.include, args.force)
+    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, args.jobs, args.include, args.force,
+                   args.meshes_anywhere)
     return 0
