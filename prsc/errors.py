@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import stat
 from dataclasses import dataclass
 
 
@@ -42,6 +44,10 @@ _SCAN_BYTES = 64 * 1024 * 1024
 def _source_line(path: str, line: int) -> str | None:
     """The text of one line of a file (its first MiB), or None when it cannot be read as text."""
     try:
+        # A FIFO is not read again: opening it would wait for a writer forever.
+        mode = os.stat(path).st_mode
+        if stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode):
+            return None
         with open(path, "rb") as handle:
             number, scanned = 1, 0
             while scanned <= _SCAN_BYTES:

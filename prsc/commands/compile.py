@@ -43,6 +43,7 @@ JOURNAL = "manifest.jsonl"  # one line per file put in place since manifest.json
 LOCK = ".prsc-lock"
 MANIFEST_FORMAT = "prsc-manifest"
 DEFAULT_WIDTH = 5
+MAX_JSON_DEPTH = 100  # reported when a scene file is nested too deeply for Python's JSON reader
 CHECKPOINT_SECONDS = 2.0  # manifest.json is rewritten at most this often during a run
 
 
@@ -90,6 +91,11 @@ def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
     def invalid(error: json.JSONDecodeError, line: int) -> PrscError:
         return PrscError(f"invalid JSON: {error.msg}", Span(str(path), line, error.colno, line, error.colno + 1))
 
+    def too_deep(document: str, first_line: int) -> PrscError:
+        line, column = _nesting_place(document, MAX_JSON_DEPTH)
+        return PrscError(f"JSON nested more than {MAX_JSON_DEPTH} levels deep",
+                         Span(str(path), first_line + line - 1, column, first_line + line - 1, column + 1))
+
     # (line number, scene): split on "\n" only, as the error renderer counts lines.
     found: list[tuple[int | None, object]] = []
     listed = True  # several scenes: name the one at fault
@@ -100,11 +106,15 @@ def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
                     found.append((number, json.loads(line)))
                 except json.JSONDecodeError as error:
                     raise invalid(error, number) from None
+                except RecursionError:
+                    raise too_deep(line, number) from None
     else:
         try:
             loaded = json.loads(text)
         except json.JSONDecodeError as error:
             raise invalid(error, error.lineno) from None
+        except RecursionError:
+            raise too_deep(text, 1) from None
         listed = isinstance(loaded, list)
         found = [(None, s) for s in loaded] if listed else [(None, loaded)]
     if not found:
@@ -118,6 +128,26 @@ def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
                 raise PrscError(message, Span(str(path), line, 1, line, 2)) from None
             raise PrscError(f"{path}: {f'scene {k}: ' if listed else ''}{message}") from None
     return [scene for _, scene in found]  # type: ignore[misc]
+
+
+def _nesting_place(text: str, limit: int) -> tuple[int, int]:
+    """(line, column) of the bracket that opens level `limit + 1` of a JSON text (strings skipped)."""
+    depth, line, column, in_string, escaped = 0, 1, 0, False, False
+    for char in text:
+        column += 1
+        if char == "\n":
+            line, column = line + 1, 0
+        elif in_string:
+            escaped, in_string = (False, True) if escaped else (char == "\\", char != '"')
+        elif char == '"':
+            in_string = True
+        elif char in "[{":
+            depth += 1
+            if depth > limit:
+                return line, column
+        elif char in "]}":
+            depth -= 1
+    return 1, 1
 
 
 def _spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = ()) -> Callable[[int], dict]:
@@ -492,7 +522,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         n = 1 if n is None else n
         # Compile the spec before touching the output folder and before any worker starts:
         # a bad spec leaves nothing behind and its errors point into the spec. (Also before
-        # reading it whole for the digest: the parser refuses a huge file after 1 MiB.)
+        # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
         from prsc.sampling import compile_sampler
 
         compiled = compile_sampler(str(file), include_dirs=include_dirs)

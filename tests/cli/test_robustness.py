@@ -51,11 +51,11 @@ def test_real_full_device_and_closed_pipe():
 
 
 @pytest.mark.parametrize("command", [["check"], ["sample"], ["compile"]])
-def test_an_endless_file_is_refused_after_a_mebibyte(tmp_path, capsys, command):
+def test_an_endless_file_is_refused_after_the_size_limit(tmp_path, capsys, command):
     """`prsc check /dev/zero` must not read forever (or until memory runs out)."""
     assert main([*command, "/dev/zero", *(["-o", str(tmp_path / "o")] if command == ["compile"] else [])]) == 2
     assert capsys.readouterr().err.startswith(
-        "/dev/zero:1:1: error: file too large (over 1 MiB; a spec may be at most 1 MiB)\n")
+        "/dev/zero:1:1: error: file too large (over 256 KiB; a spec may be at most 256 KiB)\n")
     assert not (tmp_path / "o").exists()
 
 
