@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 
 from prsc.cli import main
+from tests.original import original_params
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
 TABLE_CUBE = str(REPO / "specs" / "table_cube.prs")
 PRSC = [sys.executable, "-m", "prsc.cli"]
 
@@ -76,7 +76,7 @@ def test_binary_scene_json(tmp_path, capsys, command):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["garbage.json"]
 
 
-@pytest.mark.parametrize("spec", sorted(str(p) for p in [*(REPO / "specs").glob("*.prs"), *ORIGINAL.glob("*.prs")]),
+@pytest.mark.parametrize("spec", sorted(str(p) for p in (REPO / "specs").glob("*.prs")) + original_params(as_text=True),
                          ids=lambda s: Path(s).name)
 def test_explain_every_shipped_and_original_spec(capsys, spec):
     assert main(["explain", spec]) == 0

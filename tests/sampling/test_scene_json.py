@@ -10,12 +10,13 @@ from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import Sampler, compile_sampler
 from prsc.sampling.scene_json import color_rgba
+from tests.original import ORIGINAL, needs_original
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
 KEYS = ["name", "class", "position", "quaternion", "dimensions", "static", "mass", "color", "shape", "model", "camera", "properties"]
 
 
+@needs_original
 def test_original_table_cube_maps_compat_properties():
     scene = compile_sampler(str(ORIGINAL / "tableCube.prs")).scene(0, 0)
     assert scene["format"] == "prsc-scene" and scene["version"] == 1
