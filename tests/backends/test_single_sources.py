@@ -54,3 +54,12 @@ def test_one_atomic_write_helper_and_one_options_setter():
     setters = {path for path, text in _sources().items()
                if re.search(r"\b(option|opt)\.(timestep|integrator|cone|impratio)\s*=", text)}
     assert setters == {"assets/simulation.py"}
+
+
+def test_backends_never_import_the_commands():
+    """Layering: backends read scene JSON, never spec text, the IR or prsc.commands."""
+    import re
+
+    offenders = {path for path, text in _sources().items() if path.startswith("backends/")
+                 and re.search(r"^\s*(from|import) prsc\.(commands|ir|syntax)\b", text, re.M)}
+    assert offenders == set()
