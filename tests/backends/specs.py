@@ -12,7 +12,10 @@ SCENES_PER_SPEC = 20
 
 def all_specs() -> list[Path]:
     """Every .prs file of the original ProbRobScene specs (a skipped parameter when absent) and of specs/."""
-    return original_params() + sorted((REPO / "specs").glob("*.prs"))
+    # table_cube_naive.prs writes the same scenes as table_cube.prs (only how it is sampled
+    # differs): the backends have nothing more to show on it.
+    ours = [p for p in sorted((REPO / "specs").glob("*.prs")) if p.name != "table_cube_naive.prs"]
+    return original_params() + ours
 
 
 def spec_id(path: Path) -> str:
