@@ -325,3 +325,25 @@ def test_a_killed_sample_leaves_a_temporary_the_next_run_removes(tmp_path):
     os.utime(other, (time.time() - 10, time.time() - 10))
     assert main(["sample", str(SPEC), "-n", "2", "-o", str(target)]) == 0
     assert not temporaries() and other.exists() and len(target.read_text().splitlines()) == 2
+
+
+def test_a_bundle_whose_temporary_changes_while_written_is_never_renamed_into_place(tmp_path, monkeypatch):
+    """Item 1: another process deleting files of a half-written bundle (what a second run's
+    cleanup once did) makes the write fail; no partial bundle appears under the final name."""
+    from prsc import files
+
+    real, calls = files.write_bytes, []
+
+    def meddling(handle, data):
+        calls.append(1)
+        if len(calls) == 3:
+            for path in (tmp_path / "urdf").glob(".00000.prsc-*.tmp/a.urdf"):
+                path.unlink()  # the intruder
+        real(handle, data)
+
+    (tmp_path / "urdf").mkdir()
+    monkeypatch.setattr(files, "write_bytes", meddling)
+    with pytest.raises(OSError, match="changed while it was written"):
+        files.atomic_write_tree(tmp_path / "urdf" / "00000", {"a.urdf": "<robot/>", "b.urdf": "<robot/>",
+                                                               "scene.json": "{}"})
+    assert list((tmp_path / "urdf").iterdir()) == []
