@@ -59,28 +59,10 @@ def atomic_write(path: Path | str, data: bytes | str) -> None:
 
 
 @contextlib.contextmanager
-def atomic_text(path: Path | str) -> Iterator[IO[str]]:
-    """A text handle whose content replaces `path` only when the block completes."""
-    path = Path(path)
-    handle, tmp = tempfile.mkstemp(dir=path.absolute().parent, prefix=f".{path.name}.prsc-", suffix=".tmp")
-    try:
-        _lock(handle)
-        with os.fdopen(os.dup(handle), "w", encoding="utf-8") as out:
-            yield out
-        os.fchmod(handle, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        _remove_quietly(tmp)
-        raise
-    finally:
-        os.close(handle)
-
-
-@contextlib.contextmanager
 def atomic_path(path: Path | str) -> Iterator[Path]:
     """A temporary path (with `path`'s file type) that a library writes and that then replaces `path`."""
     path = Path(path)
-    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.prsc-", suffix=f".tmp{path.suffix}")
+    handle, tmp = tempfile.mkstemp(dir=path.absolute().parent, prefix=f".{path.name}.prsc-", suffix=f".tmp{path.suffix}")
     try:
         _lock(handle)
         yield Path(tmp)
@@ -91,6 +73,13 @@ def atomic_path(path: Path | str) -> Iterator[Path]:
         raise
     finally:
         os.close(handle)
+
+
+@contextlib.contextmanager
+def atomic_text(path: Path | str) -> Iterator[IO[str]]:
+    """A text handle whose content replaces `path` only when the block completes."""
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as out:
+        yield out
 
 
 def atomic_write_tree(folder: Path | str, files: Mapping[str, bytes | str]) -> None:
