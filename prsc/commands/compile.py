@@ -455,6 +455,9 @@ def _remove_listed(root: Path, entries: dict[int, dict[str, str]]) -> None:
         for files in entries.values():
             for rel in files.values():
                 path = root / rel
+                if path.parent.is_symlink():  # prsc made <target>/ a folder: this one leads elsewhere
+                    raise PrscError(f"{path.parent} is a symbolic link, not the folder prsc made; "
+                                    "remove it or choose another output folder")
                 if path.is_dir() and not path.is_symlink():
                     shutil.rmtree(path)
                 elif path.exists() or path.is_symlink():

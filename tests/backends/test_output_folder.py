@@ -347,3 +347,19 @@ def test_a_bundle_whose_temporary_changes_while_written_is_never_renamed_into_pl
         files.atomic_write_tree(tmp_path / "urdf" / "00000", {"a.urdf": "<robot/>", "b.urdf": "<robot/>",
                                                                "scene.json": "{}"})
     assert list((tmp_path / "urdf").iterdir()) == []
+
+
+def test_force_never_follows_a_target_folder_replaced_by_a_link(tmp_path, capsys):
+    """Item 3: `json/` swapped for a link to the user's folder: --force deletes nothing there."""
+    source = _jsonl(tmp_path, 1)
+    root = compile_scenes(str(source), ["json"], 1, 0, str(tmp_path / "out"))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "00000.json").write_text("the user's")
+    for path in (root / "json").iterdir():
+        path.unlink()
+    (root / "json").rmdir()
+    (root / "json").symlink_to(elsewhere)
+    assert main(["compile", str(source), "--seed", "3", "--force", "-o", str(tmp_path / "out")]) == 2
+    assert "is a symbolic link" in capsys.readouterr().err
+    assert (elsewhere / "00000.json").read_text() == "the user's"
