@@ -116,14 +116,6 @@ def test_two_compiles_into_one_folder_never_corrupt_it(tmp_path):
     rels = _listed(root)
     assert rels and rels <= _outputs(root)
     _check_whole(root, rels)
-    # Once the first has stopped, the same command resumes; every file its manifest lists is whole.
-    command[4] = "20"
-    again = _prsc("compile", *command)
-    assert again.communicate(timeout=120)[1] == "" and again.returncode == 0
-    manifest = json.loads((root / "manifest.json").read_text())
-    rels = {rel for s in manifest["scenes"] for rel in s["files"].values()}
-    assert {f"urdf/{k:05d}" for k in range(20)} <= rels and rels == _outputs(root)
-    _check_whole(root, rels)
 
 
 def test_kill_9_leaves_every_finished_file_recorded_and_no_writer_behind(tmp_path):
