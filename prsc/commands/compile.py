@@ -597,7 +597,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     total = sum(1 for _ in todo()) if n <= 100_000 else 0  # a progress total only when cheap to count
     bar = _progress(total)
     task = bar.add_task("compile", total=total) if bar else None
-    last_checkpoint = [time.monotonic()]
+    next_checkpoint = [time.monotonic() + CHECKPOINT_SECONDS]
 
     def done(result: tuple[int, dict[str, str], list[str]]) -> None:
         index, files, messages = result
@@ -608,9 +608,11 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
                 sys.stderr.write(f"prsc: warning: {message}\n")
         if bar:
             bar.advance(task)
-        if time.monotonic() - last_checkpoint[0] > CHECKPOINT_SECONDS:
+        if time.monotonic() > next_checkpoint[0]:
+            started = time.monotonic()
             _write_manifest(root, manifest_now())
-            last_checkpoint[0] = time.monotonic()
+            # A huge manifest is rewritten less often: at most 5 % of the run goes to it.
+            next_checkpoint[0] = time.monotonic() + max(CHECKPOINT_SECONDS, 20 * (time.monotonic() - started))
 
     def manifest_now() -> dict:
         return {
