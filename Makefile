@@ -37,11 +37,13 @@ datasets: $(STAMP)
 	  $(PRSC) compile $$spec --target json,mjcf,urdf,sdf,usd -n $(DATASET_SCENES) --seed 0 -o out/datasets --jobs 2 || exit 1; done
 
 # Samplers side by side (the paper's Table II), files written per second per format, then
-# handover episodes per CPU-second (and where an episode's CPU time goes).
+# handover episodes per CPU-second (and where an episode's CPU time goes). The original
+# specs are added when ../shared is beside the clone.
+BENCH_SPECS := specs/table_cube.prs specs/table_cube_naive.prs $(wildcard ../shared/specs/original/tableCube.prs ../shared/specs/original/tableCubeNaive.prs)
 bench: $(STAMP)
-	$(PRSC) bench ../shared/specs/original/tableCube.prs ../shared/specs/original/tableCubeNaive.prs specs/table_cube.prs
-	$(PY) -m prsc.backends.bench --spec specs/table_cube.prs -n 1000 --jobs 1,2
-	$(PY) -m prsc.backends.runner.bench --spec specs/table_cube.prs -n 21
+	$(PRSC) bench $(BENCH_SPECS)
+	$(PRSC) bench --backends specs/table_cube.prs -n 1000 --jobs 1,2
+	$(PRSC) bench --episodes specs/table_cube.prs -n 21
 
 # The paper's section IV case study: 100 Table-Cube episodes, table + plots in out/casestudy.
 CASESTUDY := $(PRSC) run specs/table_cube.prs -n 100 --seed 0 --jobs 2

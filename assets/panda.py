@@ -25,11 +25,13 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
+
+from prsc.assets.simulation import set_simulation_options
+from prsc.files import atomic_write
 
 # Bump when the conversion changes: the cache key includes it.
 RECIPE_VERSION = "3"
@@ -112,22 +114,6 @@ def _cache_dir() -> Path:
     digest.update(str(source.resolve()).encode())
     digest.update(source.read_bytes())
     return build_dir() / f"panda-{digest.hexdigest()[:12]}"
-
-
-def _write_atomic(path: Path, content: str | bytes) -> None:
-    """Write a file through a temporary file and a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        data = content.encode("utf-8") if isinstance(content, str) else content
-        with os.fdopen(handle, "wb") as out:
-            out.write(data)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _rpy_matrix(rpy: tuple[float, float, float]) -> np.ndarray:
@@ -256,11 +242,12 @@ def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
         if "visual" not in source.parts:
             continue  # visuals that reuse a collision mesh are clean already
         target = folder / "meshes" / f"{source.stem}.obj"
+        target.parent.mkdir(parents=True, exist_ok=True)
         loaded = trimesh.load(str(source), force="mesh", process=False)
         text = trimesh.exchange.obj.export_obj(
             loaded, include_normals=False, include_color=False, include_texture=False, write_texture=False
         )
-        _write_atomic(target, text)
+        atomic_write(target, text.encode("utf-8"))
         mapping[str(source)] = str(target)
     return mapping
 
@@ -346,9 +333,7 @@ def _mjcf_from_urdf(urdf_tree: ET.ElementTree, visual_meshes: dict[str, str]):
             geom.rgba = [0.95, 0.95, 0.95, 1.0]
 
     spec.modelname = "panda"
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = 10.0
+    set_simulation_options(spec.option)
     for equality in spec.equalities:
         equality.name = "finger_mimic"
         equality.solref = [0.005, 1.0]
@@ -380,10 +365,11 @@ def _ensure_built() -> Path:
     if urdf_path.is_file() and mjcf_path.is_file():
         return folder
     tree = _converted_urdf()
-    _write_atomic(urdf_path, _urdf_text(tree))
+    folder.mkdir(parents=True, exist_ok=True)
+    atomic_write(urdf_path, _urdf_text(tree))
     spec = _mjcf_from_urdf(tree, _clean_visual_meshes(tree, folder))
     xml = spec.to_xml()
-    _write_atomic(mjcf_path, xml)
+    atomic_write(mjcf_path, xml)
     return folder
 
 

@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import hashlib
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from prsc.assets.urdf_tree import Joint, RobotTree, read_urdf
+from prsc.files import atomic_path
 from prsc.geometry.rotations import matrix_to_quat
 
 RECIPE_VERSION = "1"
@@ -59,15 +58,8 @@ def robot_usd_cached(robot: str, urdf_path: Path) -> Path:
     target = _build_dir() / f"{robot}-usd-{digest.hexdigest()[:12]}" / f"{robot}.usdc"
     if not target.is_file():
         target.parent.mkdir(parents=True, exist_ok=True)
-        handle, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.stem}.", suffix=".usdc")
-        os.close(handle)
-        try:
-            _write_robot_usd(robot, read_urdf(urdf_path), Path(tmp))
-            os.replace(tmp, target)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
+        with atomic_path(target) as tmp:
+            _write_robot_usd(robot, read_urdf(urdf_path), tmp)
     return target
 
 

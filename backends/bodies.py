@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import warnings
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -15,6 +14,7 @@ from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
+from prsc.mesh_paths import mesh_folders, resolve_mesh
 
 CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
 """Rotation (w x y z, object frame) of a camera that looks along its local -Z with +Y up
@@ -83,15 +83,13 @@ def _warn_unknown_model(obj: SceneObject) -> None:
     )
 
 
-def resolve_mesh_source(obj: SceneObject, scene: Scene) -> Path:
-    """The mesh file of a mesh-shaped object: absolute, or relative to the spec's folder or the cwd."""
-    raw = str(obj.properties["mesh"])
-    candidates = [Path(raw)] if os.path.isabs(raw) else [Path(scene.spec).parent / raw, Path(raw)]
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate.resolve()
-    tried = ", ".join(str(c) for c in candidates)
-    raise PrscError(f"object {obj.name!r}: mesh file {raw!r} not found (looked for {tried})")
+def resolve_mesh_source(obj: SceneObject, scene: Scene, store: AssetStore) -> Path:
+    """The mesh file of a mesh-shaped object: in the spec's folder or the store's --include folders."""
+    folders = mesh_folders(scene.spec, store.mesh_dirs)
+    try:
+        return resolve_mesh(str(obj.properties["mesh"]), folders, store.meshes_anywhere)
+    except PrscError as error:
+        raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
 
 
 def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
@@ -103,7 +101,11 @@ def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part
         return (cylinder("cylinder", min(w, l) / 2, h),)
     if obj.shape == "sphere":
         return (sphere("sphere", min(obj.dimensions) / 2),)
-    mesh = store.normalised_mesh(resolve_mesh_source(obj, scene))
+    source = resolve_mesh_source(obj, scene, store)
+    try:
+        mesh = store.normalised_mesh(source)
+    except PrscError as error:
+        raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
     return (Part("mesh", "mesh", obj.dimensions, mesh=str(mesh)),)
 
 

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+from prsc.assets.simulation import set_simulation_options
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
@@ -31,7 +32,6 @@ from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 
-TIMESTEP = 0.002
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling
 SOLREF = (0.01, 1.0)  # stiffer than the default 0.02 so resting objects sink < 1 mm
 CONDIM_FREE = 4  # torsional friction: a held or resting object does not spin in place
@@ -58,13 +58,8 @@ class RobotFragment:
 
 def _options(spec) -> None:
     """Simulation options shared by scenes and robot fragments (so attach does not conflict)."""
-    import mujoco
-
     spec.compiler.degree = False
-    spec.option.timestep = TIMESTEP
-    spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
-    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    spec.option.impratio = 10.0
+    set_simulation_options(spec.option)
 
 
 @lru_cache(maxsize=32)

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
+from prsc.backends.names import element_names
 from prsc.errors import PrscError
+from prsc.limits import mass_problem, size_problem
 
 SHAPES = ("box", "cylinder", "sphere", "mesh")
 
@@ -36,6 +38,7 @@ class SceneObject:
     model: str | None
     camera: CameraSpec | None
     properties: Mapping[str, Any]
+    label: str = ""  # the user's name (scene JSON); `name` is its element name (prsc.backends.names)
 
 
 @dataclass(frozen=True)
@@ -110,12 +113,19 @@ def _object(raw: Any, k: int) -> SceneObject:
     dims = _floats(raw.get("dimensions"), 3, f"{where}.dimensions")
     if any(d <= 0.0 for d in dims):
         raise _fail(f"{where}.dimensions", f"width, length and height must be positive, got {list(dims)}")
+    for axis, value in zip(("width", "length", "height"), dims):
+        problem = size_problem(value)
+        if problem:
+            raise _fail(f"{where}.dimensions", f"{axis} {problem}")
     static = raw.get("static", False)
     if not isinstance(static, bool):
         raise _fail(f"{where}.static", f"expected true or false, got {static!r}")
     mass = _floats([raw.get("mass")], 1, f"{where}.mass")[0]
     if mass < 0.0:
         raise _fail(f"{where}.mass", f"must not be negative, got {mass}")
+    problem = mass_problem(mass)
+    if problem:
+        raise _fail(f"{where}.mass", problem)
     shape = raw.get("shape", "box")
     if shape not in SHAPES:
         raise _fail(f"{where}.shape", f"expected one of {', '.join(SHAPES)}, got {shape!r}")
@@ -162,6 +172,8 @@ def parse_scene(raw: Mapping[str, Any]) -> Scene:
         if obj.name in seen:
             raise _fail(f"object {obj.name!r}", "duplicate object name")
         seen.add(obj.name)
+    elements = element_names([obj.name for obj in parsed])
+    parsed = tuple(replace(obj, name=element, label=obj.name) for obj, element in zip(parsed, elements))
     params = raw.get("params") or {}
     if not isinstance(params, Mapping):
         raise _fail("params", f"expected an object, got {params!r}")

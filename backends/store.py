@@ -11,6 +11,7 @@ import hashlib
 import os
 from functools import lru_cache
 from pathlib import Path
+from typing import Sequence
 
 from prsc.backends.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
@@ -54,8 +55,10 @@ def _folder_key(folder: str) -> str:
 class AssetStore:
     """Shared files of one output folder: `<root>/<robot>/meshes/...`, `<root>/meshes/...`."""
 
-    def __init__(self, root: Path | str):
+    def __init__(self, root: Path | str, mesh_dirs: Sequence[str] = (), meshes_anywhere: bool = False):
         self.root = Path(root)
+        self.mesh_dirs = tuple(mesh_dirs)  # --include folders, searched for meshes after the spec's folder
+        self.meshes_anywhere = meshes_anywhere  # --meshes-anywhere: absolute and `..` mesh paths allowed
 
     # ------------------------------------------------------------------ robots
     def robot_file(self, robot: str, source: str | Path) -> Path:
@@ -89,8 +92,12 @@ class AssetStore:
     # ------------------------------------------------------------------ meshes
     def normalised_mesh(self, source: Path) -> Path:
         """An OBJ of `source` centred on its bounding box and scaled to a unit cube."""
-        stat = os.stat(source)
-        target = self.root / "meshes" / _normalised_name(str(source), stat.st_mtime_ns, stat.st_size)
+        try:
+            stat = os.stat(source)
+            name = _normalised_name(str(source), stat.st_mtime_ns, stat.st_size)
+        except OSError as error:
+            raise PrscError(f"cannot read mesh {source}: {error.strerror or error}") from None
+        target = self.root / "meshes" / name
         if not target.is_file():
             target.parent.mkdir(parents=True, exist_ok=True)
             atomic_write(target, _normalise_mesh_obj(Path(source)))
@@ -117,8 +124,10 @@ def _normalise_mesh_obj(source: Path) -> bytes:
 
     try:
         mesh = trimesh.load(str(source), force="mesh")
-    except Exception as error:  # trimesh raises many types for unreadable files
-        raise PrscError(f"cannot read mesh {source}: {error}") from None
+    except Exception:  # trimesh raises many types for unreadable files
+        # Its message may quote the file (a token of a text file): say only what failed.
+        raise PrscError(f"cannot read mesh {source}: not a mesh file trimesh can load "
+                        "(STL, OBJ, PLY, OFF, GLB/GLTF, ...)") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise PrscError(f"mesh {source} holds no triangles")
     low, high = mesh.bounds

@@ -7,6 +7,7 @@ import importlib
 import importlib.util
 import io
 import os
+import signal
 import sys
 from typing import Any, Callable, TextIO
 
@@ -92,6 +93,22 @@ class _GuardedStdout:
         return getattr(self._stream, name)
 
 
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that cleanup (temporaries, the manifest) runs."""
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    raise Terminated
+
+
+def _on_sigterm(handler: Any) -> Any:
+    """Set the SIGTERM handler; returns the previous one (None off the main thread, where it cannot be set)."""
+    try:
+        return signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (e.g. main() called from a test's thread)
+        return None
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point: run a subcommand, turning user errors into exit code 2."""
     words = sys.argv[1:] if argv is None else list(argv)
@@ -101,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     module = importlib.import_module(f"prsc.commands.{args.command}")
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)  # type: ignore[assignment]
+    previous = _on_sigterm(_raise_terminated)
     try:
         code = int(module.run(args) or 0)
         sys.stdout.flush()  # here, not at exit, so that a failure is reported like any other
@@ -111,6 +129,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("prsc: interrupted\n")
         return 130
+    except Terminated:
+        sys.stderr.write("prsc: terminated\n")
+        return 143
     except BrokenPipeError:
         # The reader went away (`prsc sample … | head`): stop quietly, as Unix tools do.
         _discard_stdout()
@@ -125,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         return 3
     finally:
         sys.stdout = stdout
+        if previous is not None:
+            _on_sigterm(previous)
 
 
 if __name__ == "__main__":

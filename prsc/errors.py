@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import stat
 from dataclasses import dataclass
 
 
@@ -22,11 +24,15 @@ class Span:
 class PrscError(Exception):
     """A user-facing error: reported as `path:line:col: error: message`, exit code 2."""
 
-    def __init__(self, message: str, span: Span | None = None, notes: tuple[tuple[str, Span | None], ...] = ()):
+    def __init__(self, message: str, span: Span | None = None, notes: tuple[tuple[str, Span | None], ...] = (),
+                 obj: str | None = None):
         super().__init__(message)
         self.message = message
         self.span = span
         self.notes = tuple(notes)
+        # The scene object at fault, when a later stage (a backend) knows no span: the
+        # command that has the spec's IR then reports the object's line.
+        self.obj = obj
 
 
 # Bounds on reading a source line for the caret: a line of /dev/zero or of a huge
@@ -38,6 +44,10 @@ _SCAN_BYTES = 64 * 1024 * 1024
 def _source_line(path: str, line: int) -> str | None:
     """The text of one line of a file (its first MiB), or None when it cannot be read as text."""
     try:
+        # A FIFO is not read again: opening it would wait for a writer forever.
+        mode = os.stat(path).st_mode
+        if stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode):
+            return None
         with open(path, "rb") as handle:
             number, scanned = 1, 0
             while scanned <= _SCAN_BYTES:

@@ -7,6 +7,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from prsc.backends.names import with_body_names
+
 from prsc.backends.runner.harness import run_episode
 from prsc.backends.runner.rendering import OffscreenRenderer
 from prsc.backends.runner.tasks import EpisodeResult, EpisodeTask
@@ -50,7 +52,7 @@ class FrameRecorder:
             return
         self.frames.append((label, float(data.time), self._renderer.rgb(data, self._camera)))
         if label.startswith("perceive"):
-            name = next(o["name"] for o in self.scene["objects"] if o.get("camera") is not None)
+            name = next(o["body"] for o in with_body_names(self.scene)["objects"] if o.get("camera") is not None)
             camera = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
             self.frames.append(("ceiling camera view", float(data.time), self._renderer.rgb(data, camera)))
 

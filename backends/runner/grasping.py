@@ -25,7 +25,7 @@ class HeldCube:
 
     def __init__(self, sim: Simulation, cube: dict):
         self.sim = sim
-        self.body = sim.model.body(cube["name"]).id
+        self.body = sim.model.body(cube["body"]).id
         dims = np.asarray(cube["dimensions"], float)
         self.half_height = float(dims[2]) / 2
         self.half_width = float(min(dims[0], dims[1])) / 2
@@ -89,7 +89,7 @@ class HeldCube:
     def resting_in(self, tray: dict) -> tuple[bool, float]:
         """(whether the cube is inside the tray object's box, up to a cube's height above it; its speed in m/s)."""
         model, data = self.sim.model, self.sim.data
-        body = model.body(tray["name"]).id
+        body = model.body(tray["body"]).id
         rot = data.xmat[body].reshape(3, 3)
         local = rot.T @ (self.position() - data.xpos[body])
         half = np.asarray(tray["dimensions"], float) / 2

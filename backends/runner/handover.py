@@ -14,6 +14,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from prsc.backends.names import with_body_names
 from prsc.backends.runner.grasping import PLACE_CLEARANCE, GraspFailure, HeldCube
 from prsc.backends.runner.motion import Arm, Simulation, Unreachable
 from prsc.backends.runner.perception import CeilingCamera, locate_cube
@@ -68,6 +69,7 @@ class HandoverEpisode:
     """The controller and its ground-truth checks for one compiled scene."""
 
     def __init__(self, scene: dict, model: mujoco.MjModel, data: mujoco.MjData):
+        scene = with_body_names(scene)  # as the harness passes it, also when built directly
         self.scene = scene
         self.roles = find_roles(scene)
         self.model = model
@@ -75,8 +77,8 @@ class HandoverEpisode:
         self.sim = Simulation(model, data)
         self.cube = HeldCube(self.sim, self.roles.cube)
         self.cube_half = self.cube.half_height
-        self.left = Arm.from_scene(model, data, self.roles.left_robot["name"])
-        self.right = Arm.from_scene(model, data, self.roles.right_robot["name"])
+        self.left = Arm.from_scene(model, data, self.roles.left_robot["body"])
+        self.right = Arm.from_scene(model, data, self.roles.right_robot["body"])
         self.camera: CeilingCamera | None = None
 
     def cube_position(self) -> np.ndarray:
@@ -86,7 +88,7 @@ class HandoverEpisode:
     def perceive(self, stage: str) -> np.ndarray:
         """Locate the cube with the ceiling camera; a miss or a > 2 cm error ends the episode."""
         if self.camera is None:
-            self.camera = CeilingCamera(self.model, self.roles.camera["name"])
+            self.camera = CeilingCamera(self.model, self.roles.camera["body"])
         rgb, depth = self.camera.capture(self.data)
         cam_pos, cam_mat = self.camera.pose(self.data)
         detection = locate_cube(rgb, depth, self.camera.intrinsics, cam_pos, cam_mat,

@@ -15,6 +15,8 @@ from pathlib import Path
 
 import mujoco
 
+from prsc.backends.names import with_body_names
+
 from prsc.backends.runner.controller import load_controller
 from prsc.backends.runner.faults import InfrastructureError, SimulationTimeLimit
 from prsc.backends.runner.tasks import RESERVED_KEYS, EpisodeResult, EpisodeTask
@@ -100,7 +102,7 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
     real_step = mujoco.mj_step
     mujoco.mj_step = _LimitedStep(real_step, task.max_sim_seconds, frame_every)
     try:
-        outcome, reason, extra = _interpret(controller(task.scene, model, data))
+        outcome, reason, extra = _interpret(controller(with_body_names(task.scene), model, data))
     except SimulationTimeLimit:
         outcome, reason, extra = "timeout", f"still running after {task.max_sim_seconds:g} simulated seconds", {}
     except InfrastructureError:

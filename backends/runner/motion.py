@@ -9,7 +9,7 @@ import numpy as np
 
 from prsc.assets import panda
 from prsc.backends.runner.harness import snapshot
-from prsc.backends.runner.ik import IKSolution, arm_ik
+from prsc.backends.runner.ik import ArmIK, IKSolution, arm_ik
 
 CONTROL_STEPS = 5  # physics steps per control update (10 ms at the 2 ms timestep)
 JOINT_SPEED = 1.2  # rad/s, average over a move (min-jerk peaks at 1.9x, under the Panda's 2.17)

@@ -42,7 +42,7 @@ class PickPlace:
         """One episode: the outcome, why, and how far the cube ended from the target tray's centre."""
         robot, cube_obj, _, target = _roles(scene)
         sim = Simulation(model, data)
-        arm = Arm.from_scene(model, data, robot["name"])
+        arm = Arm.from_scene(model, data, robot["body"])
         cube = HeldCube(sim, cube_obj)
         sim.wait(0.3)  # the objects settle onto their supports
         place = cube.release_point(target)

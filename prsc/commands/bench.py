@@ -1,4 +1,6 @@
 """`prsc bench FILE... [--json]`: every sampler side by side on each spec.
+`prsc bench --backends FILE [-n 1000] [--jobs 1,2]`: files written per second per format.
+`prsc bench --episodes FILE [-n 21] [--controller TARGET]`: CPU seconds per `prsc run` episode.
 
 For each spec and sampler (exact, hit-and-run, rejection): scenes per second on one core
 (scene JSON dicts, measured in process CPU time so other load on the machine does not
@@ -40,6 +42,14 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--seconds", type=float, default=20.0, help="stop a measurement after this much CPU time (default 20)")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--walk-length", type=int, default=100, help="hit-and-run steps per sample (default 100)")
+    parser.add_argument("--backends", action="store_true",
+                        help="time `prsc compile` per output format instead (default -n 1000)")
+    parser.add_argument("--jobs", default="1,2", help="with --backends: comma-separated job counts (default 1,2)")
+    parser.add_argument("--target", default=None, help="with --backends: comma-separated targets (default all)")
+    parser.add_argument("--episodes", action="store_true",
+                        help="time `prsc run` episodes instead: CPU s per episode and where it goes (default -n 21)")
+    parser.add_argument("--controller", default="prsc.backends.runner.handover:handover", metavar="TARGET",
+                        help="with --episodes: the controller (default the handover)")
 
 
 def measure(path: str, include: list[str], sampler_name: str, n: int, seconds: float, seed: int, walk_length: int) -> dict[str, Any]:
@@ -148,6 +158,14 @@ def run(args: argparse.Namespace) -> int:
 
     for path in args.files:
         compile_program(path, args.include)  # report spec errors before forking
+    if args.backends:
+        return _run_backends(args)
+    if args.episodes:
+        from prsc.commands.bench_episodes import print_episodes
+
+        for path in args.files:
+            print_episodes(path, args.scenes or 21, args.controller, args.include)
+        return 0
     results: dict[str, dict[str, dict[str, Any]]] = {}
     for path in args.files:
         results[path] = {}
@@ -159,4 +177,24 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
     else:
         _table(results)
+    return 0
+
+
+def _run_backends(args: argparse.Namespace) -> int:
+    """`prsc bench --backends`: the compile throughput per format of each spec."""
+    from prsc.backends import TARGETS
+    from prsc.commands.bench_backends import print_backends
+
+    try:
+        jobs = [int(j) for j in args.jobs.split(",") if j.strip()]
+    except ValueError:
+        raise PrscError(f"--jobs takes comma-separated counts, got {args.jobs!r}") from None
+    if not jobs or min(jobs) < 1:
+        raise PrscError(f"--jobs counts must be >= 1, got {args.jobs!r}")
+    targets = [t.strip() for t in (args.target or ",".join(TARGETS)).split(",") if t.strip()]
+    unknown = [t for t in targets if t not in TARGETS]
+    if unknown or not targets:
+        raise PrscError(f"unknown target {', '.join(unknown) or '(none)'}; choose from {', '.join(TARGETS)}")
+    for path in args.files:
+        print_backends(path, args.scenes or 1000, jobs, targets)
     return 0

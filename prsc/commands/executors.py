@@ -4,15 +4,19 @@
 returns the results in item order; `on_result(result)` sees each as soon as it finishes
 (in completion order). `fn` must be a module-level function (workers import it by name);
 `shared` is sent to each worker once, not with every item. A worker keeps its process
-between items, so it may cache what it builds (GL contexts, compiled IK models).
+between items, so it may cache what it builds (GL contexts, compiled IK models). Items may
+be a lazy iterable of any length: local workers are handed bounded batches of it.
 """
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import os
+import signal
+import sys
 import uuid
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -24,8 +28,20 @@ EXECUTORS = ("local", "ray")
 class Executor(Protocol):
     """Runs `fn(shared, item)` over items; results in item order."""
 
-    def map(self, fn: Callable[[Any, Any], Any], shared: Any, items: Sequence[Any],
+    def map(self, fn: Callable[[Any, Any], Any], shared: Any, items: Iterable[Any],
             on_result: Callable[[Any], None] | None = None) -> list[Any]: ...
+
+
+def worker_count(jobs: int) -> int:
+    """--jobs, capped at the cores this process may use (with a note when capped)."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cores = os.cpu_count() or 1
+    if jobs > cores:
+        sys.stderr.write(f"prsc: note: --jobs {jobs} is more than the {cores} cores available; using {cores}\n")
+        return cores
+    return jobs
 
 
 # ------------------------------------------------------------------ local processes
@@ -34,8 +50,29 @@ _worker_fn: Callable[[Any, Any], Any] | None = None
 _worker_shared: Any = None
 
 
-def _local_init(fn: Callable[[Any, Any], Any], shared: Any) -> None:
+BATCH_PER_WORKER = 32  # items handed out per worker and batch: the task queue stays bounded
+
+
+def _die_with_parent(parent: int) -> None:
+    """Have the kernel kill this worker when its parent dies (Linux), so none writes on after a kill -9."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        PR_SET_PDEATHSIG = 1
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    except (OSError, AttributeError):  # not Linux: the pool's own shutdown still applies
+        pass
+    if os.getppid() != parent:  # the parent died before prctl took effect
+        os._exit(1)
+
+
+def _local_init(fn: Callable[[Any, Any], Any], shared: Any, parent: int) -> None:
     global _worker_fn, _worker_shared
+    # Ctrl-C reaches the whole process group: the parent alone reports it and stops the pool.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # Pool.terminate() must end a worker
+    _die_with_parent(parent)
     _worker_fn, _worker_shared = fn, shared
 
 
@@ -57,24 +94,30 @@ class LocalExecutor:
 
     def map(self, fn, shared, items, on_result=None):
         """Run the items here (jobs 1) or in a process pool; results in item order."""
-        items = list(items)
-        results: list[Any] = [None] * len(items)
-        if self.jobs <= 1 or len(items) <= 1:
-            for k, item in enumerate(items):
-                results[k] = fn(shared, item)
+        pending = iter(items)
+        results: list[Any] = []
+        batch = list(itertools.islice(pending, self.jobs * BATCH_PER_WORKER))
+        if self.jobs <= 1 or len(batch) <= 1:
+            for item in itertools.chain(batch, pending):
+                results.append(fn(shared, item))
                 if on_result is not None:
-                    on_result(results[k])
+                    on_result(results[-1])
             return results
         method = self.start if self.start in multiprocessing.get_all_start_methods() else "spawn"
         context = multiprocessing.get_context(method)
-        chunk = 1 if method == "spawn" else max(1, min(16, len(items) // (self.jobs * 8) or 1))
-        pool = context.Pool(min(self.jobs, len(items)), initializer=_local_init, initargs=(fn, shared),
+        pool = context.Pool(min(self.jobs, len(batch)), initializer=_local_init, initargs=(fn, shared, os.getpid()),
                             maxtasksperchild=self.tasks_per_worker)
         try:
-            for number, result in pool.imap_unordered(_local_call, list(enumerate(items)), chunksize=chunk):
-                results[number] = result
-                if on_result is not None:
-                    on_result(result)
+            while batch:
+                # Pool.imap consumes its whole input at once: hand it bounded batches instead.
+                start = len(results)
+                results.extend([None] * len(batch))
+                chunk = 1 if method == "spawn" else max(1, min(16, len(batch) // (self.jobs * 8)))
+                for number, result in pool.imap_unordered(_local_call, enumerate(batch, start), chunksize=chunk):
+                    results[number] = result
+                    if on_result is not None:
+                        on_result(result)
+                batch = list(itertools.islice(pending, self.jobs * BATCH_PER_WORKER))
             pool.close()
         except BaseException:
             pool.terminate()

@@ -25,6 +25,7 @@ from prsc.errors import PrscError
 
 RESULTS = "results.jsonl"
 CAMPAIGN = "campaign.json"
+STRIPS = "strips.json"  # in failures/: the strips prsc wrote there, the only ones it replaces
 
 
 def add_parser(subparsers) -> None:
@@ -51,6 +52,8 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    parser.add_argument("--force", action="store_true",
+                        help="replace the scenes of another spec or seed in the output folder (only files prsc listed)")
 
 
 def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: Sequence[str]) -> list[dict]:
@@ -172,13 +175,14 @@ def run(args: argparse.Namespace) -> int:
     from prsc.backends.runner.tasks import EpisodeTask
     from prsc.backends.runner.worker import WorkerConfig, run_task
     from prsc.commands.compile import compile_scenes
-    from prsc.commands.executors import make_executor
+    from prsc.commands.executors import make_executor, worker_count
 
     source = Path(args.file)
     controller_ref = parse_target(args.controller)
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)
-    executor = make_executor(args.executor, args.jobs, args.address, start="spawn")
+    jobs = worker_count(args.jobs)
+    executor = make_executor(args.executor, jobs, args.address, start="spawn")
     check = getattr(controller, "check", None)
     if check is not None:
         for scene in _scenes_to_check(source, args.n, args.seed, args.include):
@@ -189,8 +193,8 @@ def run(args: argparse.Namespace) -> int:
     # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
     is_json = source.suffix in (".json", ".jsonl")
     count = args.n if args.n is not None else (0 if is_json else 10)
-    root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), args.jobs, args.include,
-                          make_executor(args.executor, args.jobs, args.address, start="fork"))
+    root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs, args.include,
+                          make_executor(args.executor, jobs, args.address, start="fork"), force=args.force)
     pairs = _compiled(root, count)
     scenes = [scene for scene, _ in pairs]
     if check is not None:
@@ -221,7 +225,7 @@ def run(args: argparse.Namespace) -> int:
                 progress.advance(bar)
 
             cpu_before = _cpu_seconds()
-            executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=args.jobs > 1 or args.executor == "ray"),
+            executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"),
                          todo, finished)
             cpu_used = _cpu_seconds() - cpu_before
     finally:
@@ -243,7 +247,7 @@ def run(args: argparse.Namespace) -> int:
     episodes = f"{len(todo)} episodes {finished_at - compiled:.1f} s"
     if todo and args.executor == "local":
         episodes += f", {cpu_used / len(todo):.2f} CPU s each"
-    console.print(f"compile {compiled - started:.1f} s, {episodes} ({args.jobs} job(s), {args.executor}); "
+    console.print(f"compile {compiled - started:.1f} s, {episodes} ({jobs} job(s), {args.executor}); "
                   f"results in {out / RESULTS}")
     sys.stdout.flush()
     return 0
@@ -261,12 +265,30 @@ def _write_strips(tasks: list, records: list[dict], out: Path, count: int) -> No
     """Frame strips of the first `count` episodes whose outcome is not `success` (re-run while recording)."""
     from prsc.backends.runner.frames import record_episode, write_strip
 
-    for stale in (out / "failures").glob("episode_*.png"):
-        stale.unlink()  # strips of an earlier run into the same folder
+    folder = out / "failures"
+    for name in _strips_written(folder):
+        (folder / name).unlink(missing_ok=True)  # strips an earlier run into this folder wrote
     failures = [(t, r) for t, r in zip(tasks, records) if r["outcome"] != "success"]
+    written = []
     for task, record in failures[:count]:
         again, frames = record_episode(task, record["sim_seconds"])
         note = "" if again.outcome == record["outcome"] else f" (re-run gave {again.outcome}!)"
+        name = f"episode_{record['index']:04d}_{record['outcome']}.png"
         write_strip(frames, f"episode {record['index']}: {record['outcome']}{note}: {record['reason']} "
-                            "(overview from the +y side looking back: +x is on the left)",
-                    out / "failures" / f"episode_{record['index']:04d}_{record['outcome']}.png")
+                            "(overview from the +y side looking back: +x is on the left)", folder / name)
+        written.append(name)
+    if written or (folder / STRIPS).exists():
+        from prsc.files import atomic_write
+
+        atomic_write(folder / STRIPS, json.dumps(written) + "\n")
+
+
+def _strips_written(folder: Path) -> list[str]:
+    """The strip files prsc recorded writing into `folder` (never anything else found there)."""
+    try:
+        names = json.loads((folder / STRIPS).read_text())
+    except (OSError, ValueError):
+        return []
+    if not isinstance(names, list):
+        return []
+    return [n for n in names if isinstance(n, str) and n.startswith("episode_") and "/" not in n and n.endswith(".png")]

@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 from typing import IO, Any
 
 from prsc.commands.outputs import output_file, write_error
@@ -67,22 +65,15 @@ def run(args: argparse.Namespace) -> int:
         stats = write_scenes(sampler, args.seed, args.start, args.scenes, sys.stdout)
         sys.stdout.flush()
     else:
+        from prsc.files import atomic_text, remove_stale_temporaries
+
         try:
-            handle, temp = tempfile.mkstemp(prefix=".prsc-sample-", suffix=".tmp", dir=target.absolute().parent)
+            # A run killed by a signal could not remove its temporary: do it now.
+            remove_stale_temporaries(target.absolute().parent, of=target.name)
+            with atomic_text(target) as out:
+                stats = write_scenes(sampler, args.seed, args.start, args.scenes, out)
         except OSError as error:
             raise write_error(error, args.output) from None
-        try:
-            try:
-                with os.fdopen(handle, "w", encoding="utf-8") as out:
-                    stats = write_scenes(sampler, args.seed, args.start, args.scenes, out)
-                os.chmod(temp, 0o644)  # mkstemp makes it private; a dataset is for others to read
-                os.replace(temp, target)
-            except OSError as error:
-                raise write_error(error, args.output) from None
-        except BaseException:
-            if os.path.exists(temp):
-                os.unlink(temp)
-            raise
     if args.stats:
         n = max(args.scenes, 1)
         per = ", ".join(f"{cause} {count / n:.3g}" for cause, count in stats.by_cause().items())

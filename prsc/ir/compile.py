@@ -8,6 +8,7 @@ from typing import Sequence
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
 from prsc.ir.builtins import MATH_CONSTANTS, OBJECT_DEFAULTS, PROPERTY_TYPES, ROOT_CLASS, SPECIFIER_PROPERTIES
+from prsc.ir.checks import check_values, constant_number
 from prsc.ir.expressions import DrawIds, ExprResolver, article, type_words
 from prsc.ir.imports import MATH, ModuleGraph, load_module_graph
 from prsc.ir.order import order_properties, order_specifiers
@@ -28,23 +29,6 @@ def _root_class() -> ClassInfo:
         kind = T.BOOL if isinstance(value, bool) else T.STRING if isinstance(value, str) else T.SCALAR
         cls.own[prop] = ir.Const(BUILTIN_SPAN, kind, value)
     return cls
-
-
-def _const_value(expr: ir.Expr) -> float | None:
-    """The value of a constant arithmetic expression, or None."""
-    if isinstance(expr, ir.Const) and expr.type == T.SCALAR:
-        return float(expr.value)
-    if isinstance(expr, ir.UnaryOp) and expr.op in "+-":
-        inner = _const_value(expr.operand)
-        return None if inner is None else (-inner if expr.op == "-" else inner)
-    if isinstance(expr, ir.BinOp):
-        a, b = _const_value(expr.left), _const_value(expr.right)
-        if a is None or b is None:
-            return None
-        if expr.op == "/" and b == 0:
-            return None
-        return {"+": a + b, "-": a - b, "*": a * b, "/": a / b if b else 0.0}[expr.op]
-    return None
 
 
 def _statement_names(module: nodes.Module) -> dict[str, Span]:
@@ -202,7 +186,7 @@ class Compiler:
         probability = 1.0
         if s.probability is not None:
             p_expr = resolver.resolve(s.probability)
-            p = _const_value(p_expr)
+            p = constant_number(p_expr)
             if p is None:
                 raise PrscError("the probability in require[p] must be a constant number", p_expr.span)
             if not 0.0 <= p <= 1.0:
@@ -371,6 +355,8 @@ def compile_program(path: str, include_dirs: Sequence[str] = ()) -> ir.Program:
     path = os.fspath(path)
     try:
         graph = load_module_graph(path, include_dirs)
-        return Compiler(graph).run()
+        program = Compiler(graph).run()
+        check_values(program, include_dirs)
+        return program
     except RecursionError:
         raise PrscError("the spec is nested too deeply to compile", Span(path, 1, 1, 1, 1)) from None

@@ -16,6 +16,7 @@ import numpy as np
 from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.rotations import matrix_to_quat
+from prsc.limits import mass_problem, size_problem
 
 FORMAT = "prsc-scene"
 VERSION = 1
@@ -187,10 +188,15 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
     if static is None:
         static = is_camera or model in STATIC_MODELS
     w, l, h = obj.dims
+    for prop, value in zip(("width", "length", "height"), obj.dims):
+        problem = size_problem(float(value))
+        if problem:
+            raise PrscError(f"{prop} of {obj.name} {problem}")
     mass = props.get("mass")
     mass = DENSITY * w * l * h if mass is None else float(mass)
-    if not 0.0 <= mass < math.inf:
-        raise PrscError(f"mass of {obj.name} must be a number >= 0 (kg), got {mass!r}")
+    problem = mass_problem(mass)
+    if problem:
+        raise PrscError(f"mass of {obj.name} {problem}")
     camera = _camera_json(props, obj.name) if is_camera else None
     extra = {k: json_value(v) for k, v in props.items() if k not in _MAPPED}
     if props.get("allowCollisions"):

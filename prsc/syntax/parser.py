@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-from lark import Lark, Token
+from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from prsc.errors import PrscError, Span
@@ -32,7 +32,10 @@ _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AH
                     "BELOW", "BEYOND", "ALIGNED", "FACING"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "DEG", "_RELATIVE", "_AND",
               "_OR"}
-MAX_SOURCE_BYTES = 1024 * 1024  # a spec is a page of text; this bounds parse time (lark: ~10 s per MiB)
+# A spec is a page of text. This bounds parse time and memory: lark's LALR parser is
+# linear but takes ~30 us and ~0.7 kB per token, so 256 KiB of `1+1+...` parses in ~8 s.
+MAX_SOURCE_BYTES = 256 * 1024
+MAX_TREE_DEPTH = 200  # where `nested too deeply` points when the tree is deeper than Python's stack
 
 
 @functools.lru_cache(maxsize=1)
@@ -150,9 +153,9 @@ def _syntax_error(path: str, error: UnexpectedInput) -> PrscError:
 def decode_source(data: bytes, path: str) -> str:
     """The text of a spec file: UTF-8 (a BOM allowed); anything else is an error at its byte."""
     if len(data) > MAX_SOURCE_BYTES:
-        size = f"{len(data) / 1e6:.1f} MB" if len(data) > MAX_SOURCE_BYTES + 1 else "over 1 MiB"
+        size = f"{len(data) / 1e6:.1f} MB" if len(data) > MAX_SOURCE_BYTES + 1 else f"over {MAX_SOURCE_BYTES // 1024} KiB"
         raise PrscError(f"file too large ({size}; a spec may be at most "
-                        f"{MAX_SOURCE_BYTES // (1024 * 1024)} MiB)", Span(path, 1, 1, 1, 1))
+                        f"{MAX_SOURCE_BYTES // 1024} KiB)", Span(path, 1, 1, 1, 1))
     return decode_text(data, path)
 
 
@@ -169,6 +172,7 @@ def decode_text(data: bytes, path: str) -> str:
 
 def parse_source(text: str, path: str) -> nodes.Module:
     """Parse spec text (path is used in spans and errors) into an AST module."""
+    tree = None
     try:
         tree = _parser().parse(text)
         return ToAst(path).transform(tree)
@@ -180,10 +184,26 @@ def parse_source(text: str, path: str) -> nodes.Module:
         if isinstance(error.orig_exc, PrscError):
             raise error.orig_exc from None
         if isinstance(error.orig_exc, RecursionError):
-            raise PrscError("the file is nested too deeply to compile", Span(path, 1, 1, 1, 1)) from None
+            raise _too_deep(path, tree) from None
         raise
     except RecursionError:
-        raise PrscError("the file is nested too deeply to compile", Span(path, 1, 1, 1, 1)) from None
+        raise _too_deep(path, tree) from None
+
+
+def _too_deep(path: str, tree: Tree | None) -> PrscError:
+    """`nested too deeply` at the first node deeper than MAX_TREE_DEPTH (found without recursion)."""
+    span = Span(path, 1, 1, 1, 1)
+    stack = [(tree, 0)] if tree is not None else []
+    while stack:
+        node, depth = stack.pop()
+        if not isinstance(node, Tree):
+            continue
+        if depth > MAX_TREE_DEPTH and getattr(node.meta, "line", None) is not None:
+            meta = node.meta
+            span = Span(path, meta.line, meta.column, meta.line, meta.column + 1)
+            break
+        stack.extend((child, depth + 1) for child in reversed(node.children))
+    return PrscError(f"this expression is nested too deeply to compile (more than {MAX_TREE_DEPTH} levels)", span)
 
 
 def parse_file(path: str | Path) -> nodes.Module:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from prsc.backends import files as backend_files
+from prsc import files as backend_files
 from prsc.cli import main
 from prsc.commands.compile import compile_scenes
 from tests.backends import readback
@@ -87,13 +87,17 @@ def test_rerun_skips_scenes_already_written(tmp_path, monkeypatch):
     assert [s["index"] for s in manifest["scenes"]] == [0, 1, 2]
 
 
-def test_a_changed_spec_or_seed_rewrites_the_scenes(tmp_path):
+def test_a_changed_spec_or_seed_rewrites_the_scenes_only_with_force(tmp_path, capsys):
     scenes = _scenes(2)
     source = _jsonl(tmp_path, scenes)
     root = compile_scenes(str(source), ["json"], 2, 0, str(tmp_path / "out"))
     scenes[0]["objects"][1]["color"] = [0, 1, 0, 1]
     source.write_text("".join(json.dumps(s) + "\n" for s in scenes))
-    compile_scenes(str(source), ["json"], 2, 0, str(tmp_path / "out"))
+    before = _all_files(root)
+    assert main(["compile", str(source), "-n", "2", "-o", str(tmp_path / "out")]) == 2
+    assert "holds 2 scenes of another spec or seed" in capsys.readouterr().err
+    assert _all_files(root) == before
+    compile_scenes(str(source), ["json"], 2, 0, str(tmp_path / "out"), force=True)
     assert json.loads((root / "json" / "00000.json").read_text())["objects"][1]["color"] == [0, 1, 0, 1]
 
 
@@ -311,7 +315,7 @@ def test_a_changed_imported_file_rewrites_the_scenes(tmp_path):
     root = compile_scenes(str(spec), ["json"], 1, 0, str(tmp_path / "out"))
     assert json.loads((root / "json" / "00000.json").read_text())["objects"][0]["dimensions"][0] == 0.1
     (tmp_path / "lib.prs").write_text("class Box:\n    width: 0.25\n")
-    compile_scenes(str(spec), ["json"], 1, 0, str(tmp_path / "out"))
+    compile_scenes(str(spec), ["json"], 1, 0, str(tmp_path / "out"), force=True)
     assert json.loads((root / "json" / "00000.json").read_text())["objects"][0]["dimensions"][0] == 0.25
 
 

@@ -9,10 +9,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from prsc.cli import main
+from tests.original import original_paths
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
-SOURCES = [p.read_bytes() for p in sorted(ORIGINAL.glob("*.prs")) + sorted((REPO / "specs").glob("*.prs"))]
+SOURCES = [p.read_bytes() for p in original_paths() + sorted((REPO / "specs").glob("*.prs"))]
 TOKENS = re.compile(rb"\w+|\s+|.", re.S)
 SNIPPETS = [b"(", b")", b",", b"\n", b"    ", b"deg", b"on", b"left", b"top", b"with", b"self", b"[", b"{", b":",
             b"=", b"class", b'"', b"require", b"(1, 2)", b"Vector3D", b"import", b"math", b".x", b"\t", b"\\"]

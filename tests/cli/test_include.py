@@ -59,7 +59,8 @@ def test_compile_finds_imports_through_include(handover, tmp_path, capsys):
         assert (parallel / "handover" / name).read_text() == (root / name).read_text()
     # The manifest's digest covers the file found through --include: editing it makes the scenes stale.
     (lib / "lib.prs").write_text("tray_gap = 0.15\n")
-    assert main(["compile", str(spec), "-n", "1", "-o", str(out), "-I", str(lib)]) == 0
+    assert main(["compile", str(spec), "-n", "1", "-o", str(out), "-I", str(lib)]) == 2
+    assert main(["compile", str(spec), "-n", "1", "-o", str(out), "-I", str(lib), "--force"]) == 0
     again = compile_sampler(str(spec), [str(lib)]).scene(0, 0)
     assert again != expected.scene(0, 0)
     assert json.loads((root / "json" / "00000.json").read_text()) == json.loads(json.dumps(again))

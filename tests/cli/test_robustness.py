@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 
 from prsc.cli import main
+from tests.original import original_params
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
 TABLE_CUBE = str(REPO / "specs" / "table_cube.prs")
 PRSC = [sys.executable, "-m", "prsc.cli"]
 
@@ -51,11 +51,11 @@ def test_real_full_device_and_closed_pipe():
 
 
 @pytest.mark.parametrize("command", [["check"], ["sample"], ["compile"]])
-def test_an_endless_file_is_refused_after_a_mebibyte(tmp_path, capsys, command):
+def test_an_endless_file_is_refused_after_the_size_limit(tmp_path, capsys, command):
     """`prsc check /dev/zero` must not read forever (or until memory runs out)."""
     assert main([*command, "/dev/zero", *(["-o", str(tmp_path / "o")] if command == ["compile"] else [])]) == 2
     assert capsys.readouterr().err.startswith(
-        "/dev/zero:1:1: error: file too large (over 1 MiB; a spec may be at most 1 MiB)\n")
+        "/dev/zero:1:1: error: file too large (over 256 KiB; a spec may be at most 256 KiB)\n")
     assert not (tmp_path / "o").exists()
 
 
@@ -76,7 +76,7 @@ def test_binary_scene_json(tmp_path, capsys, command):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["garbage.json"]
 
 
-@pytest.mark.parametrize("spec", sorted(str(p) for p in [*(REPO / "specs").glob("*.prs"), *ORIGINAL.glob("*.prs")]),
+@pytest.mark.parametrize("spec", sorted(str(p) for p in (REPO / "specs").glob("*.prs")) + original_params(as_text=True),
                          ids=lambda s: Path(s).name)
 def test_explain_every_shipped_and_original_spec(capsys, spec):
     assert main(["explain", spec]) == 0

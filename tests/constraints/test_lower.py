@@ -18,9 +18,9 @@ from prsc.errors import PrscError, format_error
 from prsc.geometry.rotations import compat_euler_to_matrix
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
+from tests.original import ORIGINAL, needs_original
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
 
 
 def lowered(tmp_path, text):
@@ -29,6 +29,7 @@ def lowered(tmp_path, text):
     return lower_program(compile_program(str(spec), ())), spec
 
 
+@needs_original
 def test_table_cube_static_parts_and_anchor():
     cprog = lower_program(compile_program(str(ORIGINAL / "tableCube.prs"), ()))
     plans = {p.name: p for p in cprog.objects}
@@ -39,6 +40,7 @@ def test_table_cube_static_parts_and_anchor():
     assert plans["camera"].region.anchor is None and len(plans["camera"].region.dynamic) == 1
 
 
+@needs_original
 def test_all_fourteen_requires_of_the_naive_spec_are_lowered_to_rows():
     cprog = lower_program(compile_program(str(ORIGINAL / "tableCubeNaive.prs"), ()))
     assert len(cprog.program.requires) == 14

@@ -11,9 +11,9 @@ from prsc.errors import PrscError
 from prsc.ir import compile_program, format_program
 from prsc.ir import model as ir
 from prsc.ir.walk import walk
+from tests.original import ORIGINAL, needs_original, original_params
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
 H = "from tabletop import *\n"
 
 
@@ -42,7 +42,7 @@ def all_exprs(program: ir.Program):
         yield from walk(r.condition)
 
 
-@pytest.mark.parametrize("path", sorted(ORIGINAL.glob("*.prs")) + sorted((REPO / "specs").glob("*.prs")),
+@pytest.mark.parametrize("path", original_params() + sorted((REPO / "specs").glob("*.prs")),
                          ids=lambda p: p.name)
 def test_shipped_specs_compile(path):
     program = compile_program(str(path))
@@ -69,6 +69,7 @@ def test_table_cube_objects_in_statement_order():
     assert program.workspace is not None and program.workspace.kind == "cuboid"
 
 
+@needs_original
 def test_original_table_cube_keeps_compat_names():
     program = compile_program(str(ORIGINAL / "tableCube.prs"))
     robot = obj(program, "r1")
@@ -257,6 +258,7 @@ def test_object_builtin_defaults(tmp_path):
         "width": 1.0, "length": 1.0, "height": 1.0, "allowCollisions": False, "shape": "box", "camera": False}
 
 
+@needs_original
 def test_every_expression_is_typed_and_no_selfref_survives():
     program = compile_program(str(ORIGINAL / "tableCubeNaive.prs"))
     for e in all_exprs(program):

@@ -167,3 +167,30 @@ def test_no_gl_context_stops_the_campaign(tmp_path):
     assert "prsc: error: no offscreen OpenGL rendering with MUJOCO_GL='glfw'" in done.stderr
     assert "Traceback" not in done.stderr
     assert (out / "results.jsonl").read_text() == ""  # no episode recorded as an outcome
+
+
+def test_a_controller_finds_objects_whose_names_the_formats_cannot_hold(tmp_path):
+    """Objects named `world` and `1 cube` become MJCF bodies `world_` and `_1_cube`; `body` says so."""
+    spec = tmp_path / "odd_names.prs"
+    spec.write_text(textwrap.dedent('''
+        from tabletop import *
+
+        table = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.8
+        world = Cube completely on table, with color "red"
+    '''))
+    controller = tmp_path / "lookup.py"
+    controller.write_text(textwrap.dedent('''
+        import mujoco
+
+        def lookup(scene, model, data):
+            bodies = {o["name"]: o["body"] for o in scene["objects"]}
+            for body in bodies.values():
+                model.body(body)  # raises when the body is not in the model
+            mujoco.mj_step(model, data)
+            return {"outcome": "found", "reason": "", "bodies": bodies}
+    '''))
+    out = tmp_path / "run"
+    assert main(["run", str(spec), *INCLUDE, "-n", "2", "-o", str(out), "--controller", f"{controller}:lookup"]) == 0
+    lines = records(out / "results.jsonl")
+    assert [r["outcome"] for r in lines] == ["found", "found"], lines
+    assert lines[0]["bodies"] == {"table": "table", "world": "world_"}

@@ -12,6 +12,7 @@ from prsc.backends.runner import DEFAULT_CONTROLLER, EpisodeTask, parse_target
 from prsc.backends.runner.handover import OUTCOMES
 from prsc.backends.runner.harness import run_episode as run_task
 from prsc.cli import main
+from tests.original import ORIGINAL, needs_original
 
 
 def run_episode(scene: dict, mjcf: Path):
@@ -91,9 +92,10 @@ def test_prsc_run_input_errors(tmp_path, capsys):
     assert not (tmp_path / "run").exists()
 
 
+@needs_original
 def test_prsc_run_three_episodes_of_the_original_spec(tmp_path, capsys):
     """`prsc run` on the original ProbRobScene tableCube.prs, unmodified: 3 episodes, 2 workers."""
-    spec = Path(__file__).resolve().parents[2] / ".." / "shared" / "specs" / "original" / "tableCube.prs"
+    spec = ORIGINAL / "tableCube.prs"
     out = tmp_path / "run"
     assert main(["run", str(spec), "-n", "3", "--seed", "0", "-o", str(out), "--jobs", "2", "--video", "1"]) == 0
     lines = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]

@@ -13,9 +13,9 @@ from prsc.ir import compile_program
 from prsc.sampling import Sampler
 from prsc.sampling.stats import RejectionStats
 from tests.sampling.scene_checks import check_scene
+from tests.original import ORIGINAL, needs_original
 
 REPO = Path(__file__).resolve().parents[2]
-ORIGINAL = REPO / ".." / "shared" / "specs" / "original"
 MANY = REPO / "tests" / "sampling" / "data" / "many_specifiers.prs"
 
 
@@ -117,6 +117,7 @@ def test_an_unbounded_region_is_a_clear_error(tmp_path):
         Sampler(compile_program(str(spec), ())).scene(0, 0)
 
 
+@needs_original
 def test_baseline_counts_rejections_by_cause_and_exact_rejects_nothing():
     program = compile_program(str(ORIGINAL / "tableCube.prs"), ())
     naive = compile_program(str(ORIGINAL / "tableCubeNaive.prs"), ())

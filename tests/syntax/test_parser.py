@@ -9,8 +9,8 @@ import pytest
 from prsc.errors import PrscError
 from prsc.syntax import nodes as n
 from prsc.syntax import parse_file, parse_source
+from tests.original import original_params
 
-ORIGINAL = Path(__file__).resolve().parents[2] / ".." / "shared" / "specs" / "original"
 SPECS = Path(__file__).resolve().parents[2] / "specs"
 
 
@@ -21,7 +21,7 @@ def one(source: str) -> n.Statement:
     return module.statements[0]
 
 
-@pytest.mark.parametrize("path", sorted(ORIGINAL.glob("*.prs")) + sorted(SPECS.glob("*.prs")), ids=lambda p: p.name)
+@pytest.mark.parametrize("path", original_params() + sorted(SPECS.glob("*.prs")), ids=lambda p: p.name)
 def test_every_shipped_spec_parses(path):
     module = parse_file(path)
     assert module.statements

@@ -1,6 +1,6 @@
 """Benchmark of episodes: CPU seconds per episode and where they go (`make bench`).
 
-    python -m prsc.backends.runner.bench [--spec specs/table_cube.prs] [-n 21] [--controller TARGET]
+    prsc bench --episodes FILE [-n 21] [--controller TARGET]
 
 Compiles n scenes, runs the first episode to warm the worker (GL context, render context,
 IK models, MuJoCo's mesh cache), then the other n-1 in this process, as one worker of
@@ -11,15 +11,14 @@ stepping (`mj_step`) and rendering.
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import sys
 import tempfile
 import time
 from collections import Counter
 from contextlib import contextmanager
-from pathlib import Path
+
+from prsc.errors import PrscError
 
 
 @contextmanager
@@ -74,20 +73,13 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
     return {"totals": totals, "outcomes": Counter(r.outcome for r in results)}
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the numbers."""
-    parser = argparse.ArgumentParser(prog="python -m prsc.backends.runner.bench", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--spec", default="specs/table_cube.prs")
-    parser.add_argument("-n", type=int, default=21, help="scenes (the first is the warm-up; default 21)")
-    parser.add_argument("--controller", default="prsc.backends.runner.handover:handover")
-    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR")
-    args = parser.parse_args(argv)
-    if args.n < 2:
-        parser.error("-n must be >= 2 (one warm-up episode, then the measured ones)")
-    found = bench(args.spec, args.n, args.controller, args.include)
+def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) -> None:
+    """Run the benchmark on one spec and print the numbers."""
+    if n < 2:
+        raise PrscError("-n must be >= 2 with --episodes (one warm-up episode, then the measured ones)")
+    found = bench(spec, n, controller, include_dirs)
     t, episodes = found["totals"], found["totals"]["episodes"]
-    print(f"prsc episode benchmark: {episodes} episodes of {args.spec} after one warm-up, one worker, "
+    print(f"prsc episode benchmark: {episodes} episodes of {spec} after one warm-up, one worker, "
           f"load average {os.getloadavg()[0]:.2f}")
     print(f"  {t['cpu'] / episodes:.3f} CPU s per episode = {episodes / t['cpu']:.2f} episodes per CPU-second "
           f"({t['wall'] / episodes:.3f} s wall each, {t['sim'] / episodes:.1f} simulated s each)")
@@ -96,8 +88,3 @@ def main(argv: list[str] | None = None) -> int:
           f"({t['sim'] / max(t['step'], 1e-9) / 0.002:,.0f} steps per CPU-second at a 2 ms step), "
           f"render {t['render'] / episodes:.3f}, controller and the rest {other / episodes:.3f} CPU s")
     print("  outcomes: " + ", ".join(f"{o} {c}" for o, c in found["outcomes"].most_common()))
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,6 +1,4 @@
-"""Benchmark of the backends: files written per second per format (`make bench`).
-
-    python -m prsc.backends.bench [--spec specs/table_cube.prs] [-n 1000] [--jobs 1,2]
+"""`prsc bench --backends SPEC`: files written per second per format (`make bench`).
 
 Each run is `prsc compile` end to end (sampling, rendering, atomic writes, manifest) into a
 fresh temporary folder; the asset store (Panda meshes) is warmed first so runs measure
@@ -9,15 +7,11 @@ steady-state throughput. Prints one line per format and job count.
 
 from __future__ import annotations
 
-import argparse
 import os
 import shutil
-import sys
 import tempfile
 import time
 from pathlib import Path
-
-from prsc.backends import TARGETS
 
 
 def _cpu_seconds() -> float:
@@ -34,6 +28,7 @@ def _count_files(folder: Path) -> int:
 
 def bench(spec: str, n: int, jobs: list[int], targets: list[str]) -> list[dict]:
     """Time `prsc compile` of `n` scenes per target and job count."""
+    from prsc.backends import TARGETS
     from prsc.commands.compile import compile_scenes
 
     rows = []
@@ -57,27 +52,13 @@ def bench(spec: str, n: int, jobs: list[int], targets: list[str]) -> list[dict]:
     return rows
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print a table."""
-    parser = argparse.ArgumentParser(prog="python -m prsc.backends.bench", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--spec", default="specs/table_cube.prs")
-    parser.add_argument("-n", type=int, default=1000)
-    parser.add_argument("--jobs", default="1,2", help="comma-separated job counts (default 1,2)")
-    parser.add_argument("--target", default=",".join(TARGETS), help="comma-separated targets (default all)")
-    args = parser.parse_args(argv)
+def print_backends(spec: str, n: int, jobs: list[int], targets: list[str]) -> None:
+    """Run the backends benchmark on one spec and print a table."""
     os.environ.setdefault("MUJOCO_GL", "egl")
-    jobs = [int(j) for j in args.jobs.split(",")]
-    targets = [t for t in args.target.split(",") if t]
-    print(f"prsc backends benchmark: {args.n} scenes of {args.spec}, {os.cpu_count()} CPUs")
+    print(f"prsc backends benchmark: {n} scenes of {spec}, {os.cpu_count()} CPUs")
     print(f"load average {os.getloadavg()[0]:.2f} (other processes slow the wall-clock rates; the CPU-time rate is")
     print("scenes per CPU second over all processes of the run: on an idle machine, scenes/s ~ jobs x that)")
     print(f"{'target':<6} {'jobs':>4} {'seconds':>8} {'scenes/s':>9} {'files':>7} {'files/s':>9} {'scenes/cpu-s':>13}")
-    for row in bench(args.spec, args.n, jobs, targets):
+    for row in bench(spec, n, jobs, targets):
         print(f"{row['target']:<6} {row['jobs']:>4} {row['seconds']:>8.2f} {row['scenes'] / row['seconds']:>9.1f}"
               f" {row['files']:>7} {row['files'] / row['seconds']:>9.1f} {row['scenes'] / row['cpu']:>13.1f}", flush=True)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
