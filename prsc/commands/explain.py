@@ -115,7 +115,7 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
         }.get(mode, mode)
         out.append(f"  region: {cache}")
         half = np.array(obj.dims) * 0.5
-        from prsc.constraints.model import Support
+        from prsc.constraints.support import Support
 
         if plan.orientation is not None and plan.orientation.after_position:
             support = Support(None, half, plan.orientation.bound_mode)

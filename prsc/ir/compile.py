@@ -105,6 +105,7 @@ class Compiler:
             classes=tuple(ir.ClassDef(c.name, c.parent.name if c.parent else None, tuple(c.defaults().items()),
                                       c.span) for c in self.classes),
             source_files=tuple(self.graph.modules[p].path for p in self.graph.order),
+            sources=tuple((self.graph.modules[p].path, self.graph.modules[p].source) for p in self.graph.order),
         )
 
     def _execute(self, real: str) -> None:

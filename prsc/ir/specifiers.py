@@ -76,6 +76,11 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
     if isinstance(spec, nodes.FacingTowardSpec):
         target = expect(r(spec.target), LOCATED_TYPES, "the target of `facing toward`")
         return ir.FacingToward(span, ("orientation",), POSITION, target)
+    if isinstance(spec, nodes.ReachableSpec):
+        robot = r(spec.robot)
+        if robot.type not in (T.OBJECT, T.ANY):
+            raise PrscError(f"`reachable by` needs a robot object, not {article(robot.type)}", robot.span)
+        return ir.ReachableBy(span, POSITION, (), robot)
     raise PrscError("unknown specifier", span)  # pragma: no cover
 
 
