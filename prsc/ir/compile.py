@@ -22,7 +22,7 @@ BUILTIN_SPAN = Span("<builtin Object>", 1, 1, 1, 1)
 
 
 def _root_class() -> ClassInfo:
-    """`Object` with the built-in defaults of LANGUAGE.md section 6."""
+    """`Object` with the built-in defaults of docs/language.md section 11."""
     cls = ClassInfo(ROOT_CLASS, None, BUILTIN_SPAN)
     for prop, value in OBJECT_DEFAULTS:
         kind = T.BOOL if isinstance(value, bool) else T.STRING if isinstance(value, str) else T.SCALAR

@@ -171,7 +171,7 @@ class RegionExpr(Expr):
       "polyhedron": vertices (ListExpr of vectors)
       "intersection": regions (ListExpr of regions)
       "all", "empty": no args
-    orientation args are VectorExpr of compat Euler angles (LANGUAGE.md section 1).
+    orientation args are VectorExpr of compat Euler angles (docs/language.md, `with orientation`).
     """
 
     kind: str

@@ -1,5 +1,5 @@
 """Sequential scene sampling: objects in dependency order, each uniform on its feasible
-region given the objects before it (LANGUAGE.md section 5.4), never colliding.
+region given the objects before it (docs/sampling.md, "The law of a scene"), never colliding.
 
 Per object: the region of its rules (regions.py); placed objects whose boxes could reach
 it are the only collision candidates (AABB broad phase). With no candidates and no

@@ -13,8 +13,10 @@ own separating-axis test over all 15 axes.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -577,4 +579,26 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         if abs(body.r[2, 2] - 1.0) > 1e-9 or np.max(np.abs(forward - d / np.linalg.norm(d))) > 1e-9:
             return "does not face toward its target"
         return None
+    if isinstance(spec, ir.ReachableBy):
+        robot = ev.ev(spec.robot)
+        if not isinstance(robot, Body):
+            raise Unknown("reachable by a non-object")
+        return _outside_reach(robot, p)
     raise Unknown(f"the checker has no test for {type(spec).__name__}")
+
+
+REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints" / "reach"
+
+
+def _outside_reach(robot: Body, p: np.ndarray) -> str | None:
+    """Whether p is in the robot model's reachable cells, read from the shipped data file itself."""
+    model = robot.data.get("properties", {}).get("model") or robot.data.get("model")
+    path = REACH_DATA / f"{model}.json"
+    if not path.is_file():
+        raise Unknown(f"no reach data for model {model!r}")
+    data = json.loads(path.read_text(encoding="utf-8"))
+    cells = [data["cell"]]
+    base = robot.p - robot.r[:, 2] * robot.dims[2] / 2
+    local = robot.r.T @ (p - base)
+    worst = min(float(np.max(np.array(c["A"]) @ local - np.array(c["b"]))) for c in cells)
+    return None if worst <= TOL else f"outside {robot.name}'s reach by {worst:.3g} m"
