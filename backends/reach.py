@@ -1,18 +1,21 @@
 """The Panda's top-down reachable set, from its kinematics: the data `reachable by` reads.
 
-`python -m prsc.backends.reach` (or `make reach`) regenerates
+`python -m prsc.backends.reach` regenerates
 prsc/constraints/reach/panda.json. The constraint stage reads that file and never
 imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK.
 
 Reachable means what the handover controller needs (backends/runner/episode.py): with
 the gripper pointing down as at home, the tool centre reaches the point, the point 12 cm
 above it (the approach) and 15 cm above it (the lift), each IK solved from the previous
-one as the controller does. Along each ray from the base (24 directions) and at each
-height (5 levels) the reachable radii are scanned every 5 cm and the ends bisected to
-3 mm. A cell (a height band times a 15 degree sector) keeps the radii reachable on all
-four of its corner rays, shrunk by a margin, as a convex prism: the trapezoid between
-the chord of the outer arc and the tangent chord outside the inner arc. The cells are
-an inner approximation of a set that is an annulus, not convex.
+one as the controller does. Along each ray from the base (24 directions, every 15
+degrees) and at each height (HEIGHTS) the longest run of reachable radii is scanned every
+5 cm and its ends bisected to 3 mm.
+
+The reachable set is an annulus about the base, not convex. prsc keeps one convex cell
+inside it (convex_cell): the half-plane ahead of the base beyond the largest inner
+radius, cut by the chord of every sector's outer radius, over the heights CELL_LEVELS,
+each bound shrunk by a margin. docs/sampling.md reports how much of a tray it keeps
+(`--tray-report SPEC` measures it against the IK on a grid).
 """
 
 from __future__ import annotations
@@ -26,12 +29,13 @@ import numpy as np
 
 APPROACH = 0.12  # m: the controller's approach height above the grasp point
 LIFT = 0.15  # m: the controller's lift
-HEIGHTS = (-0.05, 0.05, 0.15, 0.25, 0.35)  # m above the base: the levels the cells span
+HEIGHTS = (-0.05, 0.0, 0.05, 0.15, 0.25, 0.35)  # m above the base: the levels the cells span
 SECTORS = 24
 RADII = tuple(round(0.1 + 0.05 * i, 3) for i in range(19))  # the coarse scan, m
 REFINE = 4  # bisections of each end of the reachable run (5 cm / 2^4 ~ 3 mm)
-MARGIN = 0.01  # m taken off each end of a cell's radial interval
-CELL_LEVELS = (0, 1, 2)  # the heights (indices) the one convex cell spans: -5 cm to +15 cm about the base
+MARGIN = 0.01  # m taken off the outer radii
+INNER_MARGIN = 0.03  # m added to the inner radius: near the base the IK fails in scattered spots
+CELL_LEVELS = (1, 2, 3)  # the heights (indices) the one convex cell spans: 0 to 15 cm above the base
 
 OUTPUT = Path(__file__).resolve().parent.parent / "prsc" / "constraints" / "reach" / "panda.json"
 
@@ -84,47 +88,20 @@ def ray_interval(reach: TopDownReach, angle: float, height: float) -> tuple[floa
     if best is None:
         return None
     lo_in, hi_in = RADII[best[0]], RADII[best[1] - 1]
-    lo_out = RADII[best[0] - 1] if best[0] > 0 else None
-    hi_out = RADII[best[1]] if best[1] < len(RADII) else None
-    lo, hi = lo_in, hi_in
-    if lo_out is not None:
-        a, b = lo_out, lo_in  # a unreachable, b reachable
-        for _ in range(REFINE):
-            mid = (a + b) / 2
-            a, b = (a, mid) if reach.reaches(_ray_point(angle, mid, height)) else (mid, b)
-        lo = b
-    if hi_out is not None:
-        a, b = hi_in, hi_out  # a reachable, b unreachable
-        for _ in range(REFINE):
-            mid = (a + b) / 2
-            a, b = (mid, b) if reach.reaches(_ray_point(angle, mid, height)) else (a, mid)
-        hi = a
+    lo = _boundary(reach, angle, height, lo_in, RADII[best[0] - 1]) if best[0] > 0 else lo_in
+    hi = _boundary(reach, angle, height, hi_in, RADII[best[1]]) if best[1] < len(RADII) else hi_in
     return lo, hi
 
 
-def cell_rows(a0: float, a1: float, r_in: float, r_out: float, z0: float, z1: float) -> tuple[list, list]:
-    """Rows A q <= b of the prism: sector [a0, a1], radii [r_in, r_out] (inner approximation), z in [z0, z1]."""
-    half = (a1 - a0) / 2
-    mid = (a0 + a1) / 2
-    rows, offsets = [], []
-    # Side walls through the base: the sector between the rays a0 and a1.
-    for angle, sign in ((a0, -1.0), (a1, 1.0)):
-        direction = _ray_point(angle, 1.0, 0.0)
-        normal = sign * np.array([direction[1], -direction[0], 0.0])  # horizontal, across the ray
-        if normal @ _ray_point(mid, 1.0, 0.0) > 0:
-            normal = -normal
-        rows.append(normal)
-        offsets.append(0.0)
-    radial = _ray_point(mid, 1.0, 0.0)
-    # Outer: the chord between the outer arc's ends (inside the circle r_out).
-    rows.append(radial)
-    offsets.append(r_out * math.cos(half))
-    # Inner: the tangent to the circle r_in at the middle angle (outside the inner circle).
-    rows.append(-radial)
-    offsets.append(-r_in)
-    rows += [np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0])]
-    offsets += [z1, -z0]
-    return [[float(v) for v in row] for row in rows], [float(v) for v in offsets]
+def _boundary(reach: TopDownReach, angle: float, height: float, inside: float, outside: float) -> float:
+    """The reachable radius nearest the boundary between a reachable and an unreachable radius (bisection)."""
+    for _ in range(REFINE):
+        mid = (inside + outside) / 2
+        if reach.reaches(_ray_point(angle, mid, height)):
+            inside = mid
+        else:
+            outside = mid
+    return inside
 
 
 def convex_cell(rays: dict, angles: list[float]) -> tuple[list, list]:
@@ -135,7 +112,7 @@ def convex_cell(rays: dict, angles: list[float]) -> tuple[list, list]:
     CELL_LEVELS. Sectors wholly behind the line y = d are cut by it and need no chord.
     """
     inner = max(rays[k, j][0] for k in CELL_LEVELS for j in range(SECTORS) if abs(angles[j]) <= math.pi / 2)
-    d = inner + MARGIN
+    d = inner + INNER_MARGIN
     rows, offsets = [[0.0, -1.0, 0.0]], [-d]
     for j in range(SECTORS):
         a0, a1 = angles[j], angles[j + 1]
@@ -163,20 +140,6 @@ def compute() -> dict:
         for j in range(SECTORS):
             rays[k, j] = ray_interval(reach, angles[j], height)
         rays[k, SECTORS] = rays[k, 0]
-    cells = []
-    for k in range(len(HEIGHTS) - 1):
-        for j in range(SECTORS):
-            corners = [rays[kk, jj] for kk in (k, k + 1) for jj in (j, j + 1)]
-            if any(c is None for c in corners):
-                continue
-            half = (angles[j + 1] - angles[j]) / 2
-            r_in = max(c[0] for c in corners) / math.cos(half) + MARGIN  # type: ignore[index]
-            r_out = min(c[1] for c in corners) - MARGIN  # type: ignore[index]
-            if r_out * math.cos(half) <= r_in + 1e-3:
-                continue
-            a, b = cell_rows(angles[j], angles[j + 1], r_in, r_out, HEIGHTS[k], HEIGHTS[k + 1])
-            cells.append({"A": a, "b": b, "sector": [angles[j], angles[j + 1]], "radii": [r_in, r_out],
-                          "heights": [HEIGHTS[k], HEIGHTS[k + 1]]})
     cell_a, cell_b = convex_cell(rays, angles)
     return {
         "robot": "panda",
@@ -186,19 +149,72 @@ def compute() -> dict:
         "angles": angles[:SECTORS],
         "rays": [[k, j, *(rays[k, j] or (None, None))] for k in range(len(HEIGHTS)) for j in range(SECTORS)],
         "margin": MARGIN,
-        "cells": cells,
+        "inner_margin": INNER_MARGIN,
         "cell": {"A": cell_a, "b": cell_b, "heights": [HEIGHTS[CELL_LEVELS[0]], HEIGHTS[CELL_LEVELS[-1]]]},
     }
 
 
+def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02) -> dict:
+    """How much of a tray the cell keeps, against the IK on a grid of cube centres.
+
+    Grid over the cube centres `completely on` the tray allows (scene 0 of seed 0), every
+    `step` metres: the fraction in the cell, the fraction the IK reaches, and the
+    fraction of the reachable ones the cell keeps (and any cell point the IK misses).
+    """
+    from prsc.constraints.reach import reach_cell
+    from prsc.sampling import compile_sampler
+
+    scene = compile_sampler(spec).scene(0, 0)
+    objects = {o["name"]: o for o in scene["objects"]}
+    rot = _quat_matrix(objects[robot]["quaternion"])
+    base = np.asarray(objects[robot]["position"]) - rot[:, 2] * objects[robot]["dimensions"][2] / 2
+    centre, dims = np.asarray(objects[tray]["position"]), np.asarray(objects[tray]["dimensions"])
+    half_cube = np.asarray(objects[cube]["dimensions"]) / 2
+    z = objects[cube]["position"][2]
+    a, b = reach_cell(objects[robot]["model"])
+    reach = TopDownReach()
+    xs = np.arange(centre[0] - dims[0] / 2 + half_cube[0], centre[0] + dims[0] / 2 - half_cube[0] + 1e-9, step)
+    ys = np.arange(centre[1] - dims[1] / 2 + half_cube[1], centre[1] + dims[1] / 2 - half_cube[1] + 1e-9, step)
+    counts = {"points": 0, "in_cell": 0, "reached": 0, "both": 0}
+    for x in xs:
+        for y in ys:
+            q = rot.T @ (np.array([x, y, z]) - base)
+            in_cell, reached = bool(np.all(a @ q <= b)), reach.reaches(q)
+            counts["points"] += 1
+            counts["in_cell"] += in_cell
+            counts["reached"] += reached
+            counts["both"] += in_cell and reached
+    n = counts["points"]
+    return {
+        **counts, "step": step,
+        "cell_fraction_of_tray": counts["in_cell"] / n,
+        "reachable_fraction_of_tray": counts["reached"] / n,
+        "reachable_kept_by_cell": counts["both"] / max(counts["reached"], 1),
+        "cell_points_not_reached": counts["in_cell"] - counts["both"],
+    }
+
+
+def _quat_matrix(q: list[float]) -> np.ndarray:
+    w, x, y, z = q
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
 def main() -> None:
-    """Regenerate the data file."""
+    """Regenerate the data file, or report how much of a tray it keeps."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--output", default=str(OUTPUT), help=f"where to write (default {OUTPUT})")
+    parser.add_argument("--tray-report", metavar="SPEC", help="instead: the fraction of tr_1 that c1 keeps under r1, vs IK")
     args = parser.parse_args()
+    if args.tray_report:
+        print(json.dumps(tray_report(args.tray_report, "tr_1", "c1", "r1"), indent=1))
+        return
     data = compute()
     Path(args.output).write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
-    print(f"{len(data['cells'])} cells written to {args.output}")
+    print(f"{len(data['cell']['b'])} rows of the cell written to {args.output}")
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ from prsc.constraints.model import REQUIRE, ConstraintProgram, ObjectPlan, Requi
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.position import specifier_rule, workspace_rule
 from prsc.constraints.requirements import RequirePlan, plan_requires, require_check, require_rule
-from prsc.constraints.requires import mentioned_objects
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
 from prsc.constraints.values import DIMENSIONS, ObjectValue, RegionValue, dimension, static_dims
@@ -170,4 +169,4 @@ def lower_program(program: ir.Program) -> ConstraintProgram:
     )
 
 
-__all__ = ["lower_program", "mentioned_objects"]
+__all__ = ["lower_program"]

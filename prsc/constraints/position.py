@@ -9,12 +9,11 @@ import numpy as np
 from prsc.constraints import specifiers as rows
 from prsc.constraints.analysis import CONST, LOCATED_ARGS, common_anchor, motion
 from prsc.constraints.build import reads_support, rows_from_values
-from prsc.constraints.context import SceneContext
 from prsc.constraints.model import CONTAINMENT, POSITION, RELATIVE, RowTemplate, Rule
 from prsc.constraints.requires import mentioned_objects
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
-from prsc.constraints.values import ObjectValue, static_dims
+from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
 
@@ -72,15 +71,7 @@ def template(low: LoweringState, rule: Rule, support: Support | None, me: Object
     anchor = common_anchor(motions, LOCATED_ARGS.get(rule.kind, ()))
     if anchor is None:
         return None
-    facts = low.facts
-    dims = static_dims(facts.props[anchor])
-    decl = low.program.objects[low.index_of[anchor]]
-    at_origin = ObjectValue(anchor, decl.class_name, decl.span, np.zeros(3), facts.rotations[anchor], dims, dict(facts.props[anchor]))
-    # Every argument is constant or a location of the anchor: evaluating them needs no draw.
-    ctx = SceneContext(None)  # type: ignore[arg-type]
-    ctx.objects.update(facts.objects)
-    ctx.objects[me.name] = me
-    ctx.objects[anchor] = at_origin
+    ctx = low.fixed_context(me, anchor)
     values = [compiler.compile(arg).value if m.kind == CONST else compiler.compile(arg).fn(ctx) for arg, m in zip(rule.args, motions)]
     return RowTemplate(rows_from_values(rule, values, needs), anchor)
 

@@ -10,8 +10,8 @@ import numpy as np
 
 from prsc.constraints.analysis import rigid
 from prsc.constraints.context import SceneContext
-from prsc.constraints.operations import truthy
 from prsc.constraints.model import REQUIRE, RequireCheck, RowLabel, RowTemplate, Rule, SoftRequire
+from prsc.constraints.operations import truthy
 from prsc.constraints.requires import constant_apart_from, lower_condition, mentioned_objects
 from prsc.constraints.state import LoweringState
 from prsc.constraints.values import ObjectValue
@@ -98,26 +98,13 @@ def _template(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, 
     cond = lower_condition(low.compiler, req.condition, target, anchor)
     if cond is None:
         return None
-    ctx = SceneContext(None)  # type: ignore[arg-type]
-    ctx.objects.update(low.facts.objects)
-    ctx.objects[target] = me
-    if anchor is not None:
-        facts = low.facts
-        decl = low.program.objects[low.index_of[anchor]]
-        ctx.objects[anchor] = ObjectValue(anchor, decl.class_name, decl.span, np.zeros(3), facts.rotations[anchor],
-                                          _dims(facts, anchor))
-    poly, bt, dt = _rows6(cond(ctx), label)
+    poly, bt, dt = _rows6(cond(low.fixed_context(me, anchor)), label)
     if not (bt.any() or dt.any()):
         return RowTemplate(poly, None)
     # Rigid: the anchor's columns are minus the target's, so the rows are on p - t.
     if np.allclose(bt, -poly.A, rtol=0, atol=1e-12) and np.allclose(dt, -poly.C, rtol=0, atol=1e-12):
         return RowTemplate(poly, anchor)
     return None
-
-
-def _dims(facts: Any, name: str) -> tuple[float, float, float]:
-    props = facts.props[name]
-    return (float(props["width"]), float(props["length"]), float(props["height"]))
 
 
 def require_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, soft: int | None, support_known: bool) -> Rule | None:

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import numpy as np
+
+from prsc.constraints.context import SceneContext
 from prsc.constraints.evaluate import ExprCompiler, StaticFacts
 from prsc.constraints.model import RowLabel
+from prsc.constraints.values import ObjectValue, static_dims
 from prsc.errors import Span
 from prsc.ir import model as ir
 
@@ -44,6 +48,22 @@ class LoweringState:
         """Register a row label; returns its id."""
         self.labels.append(RowLabel(obj, text, span, cause, tuple(r for r in refs if r != obj)))
         return len(self.labels) - 1
+
+    def fixed_context(self, me: ObjectValue, anchor: str | None = None) -> SceneContext:
+        """What a row template's arguments read: the objects fixed at compile time, the object
+        being lowered, and the anchor (rotation and size fixed) at the origin.
+
+        Only arguments the analyses found constant or moving with the anchor are evaluated
+        in it, so nothing asks it for a random draw."""
+        ctx = SceneContext(None)  # type: ignore[arg-type]
+        ctx.objects.update(self.facts.objects)
+        ctx.objects[me.name] = me
+        if anchor is not None:
+            facts = self.facts
+            decl = self.program.objects[self.index_of[anchor]]
+            ctx.objects[anchor] = ObjectValue(anchor, decl.class_name, decl.span, np.zeros(3), facts.rotations[anchor],
+                                              static_dims(facts.props[anchor]), dict(facts.props[anchor]))
+        return ctx
 
     def text(self, span: Span | None, fallback: str) -> str:
         """The source text of a span."""
