@@ -113,10 +113,11 @@ def test_reachable_by_an_unknown_model_or_a_point_is_an_error_at_the_specifier(t
 def test_explain_shows_the_rows_and_their_source(capsys):
     from prsc.cli import main
 
+    line = next(i for i, text in enumerate(REACH_SPEC.read_text().splitlines(), 1) if text.startswith("c1 = "))
     assert main(["explain", str(REACH_SPEC)]) == 0
     out = capsys.readouterr().out
-    assert f"reachable by r1  [containment; {REACH_SPEC}:21]" in out
+    assert f"reachable by r1  [containment; {REACH_SPEC}:{line}]" in out
     assert main(["explain", str(REACH_SPEC), "--json"]) == 0
-    entry = next(e for e in json.loads(capsys.readouterr().out)["rules"] if e["kind"] == "reachable")
-    assert entry["line"] == 21 and entry["rows_are"] == "the same in every scene" and len(entry["rows"]["A"]) > 4
+    entry = next(e for e in json.loads(capsys.readouterr().out)["rules"] if e["kind"] == "reachable" and e["object"] == "c1")
+    assert entry["line"] == line and entry["rows_are"] == "the same in every scene" and len(entry["rows"]["A"]) > 4
     assert not math.isnan(entry["rows"]["b"][0])
