@@ -1,6 +1,6 @@
 """The Panda's top-down reachable set, from its kinematics: the data `reachable by` reads.
 
-`python -m prsc.backends.reach` regenerates
+`python -m prsc.backends.reach` (`make reach`) regenerates
 prsc/constraints/reach/panda.json. The constraint stage reads that file and never
 imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK.
 
