@@ -1,7 +1,7 @@
 """The Panda's top-down reachable set, from its kinematics: the data `reachable by` reads.
 
 `python -m prsc.backends.reach` (`make reach`) regenerates
-prsc/constraints/reach/panda.json. The constraint stage reads that file and never
+prsc/constraints/panda_reach.json. The constraint stage reads that file and never
 imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK.
 
 Reachable means what the handover controller needs (backends/runner/episode.py): with
@@ -37,7 +37,7 @@ MARGIN = 0.01  # m taken off the outer radii
 INNER_MARGIN = 0.03  # m added to the inner radius: near the base the IK fails in scattered spots
 CELL_LEVELS = (1, 2, 3)  # the heights (indices) the one convex cell spans: 0 to 15 cm above the base
 
-OUTPUT = Path(__file__).resolve().parent.parent / "prsc" / "constraints" / "reach" / "panda.json"
+OUTPUT = Path(__file__).resolve().parent.parent / "prsc" / "constraints" / "panda_reach.json"
 
 
 class TopDownReach:

@@ -1,6 +1,6 @@
 """`reachable by R`: the robot model's top-down reachable set as rows, read from shipped data.
 
-prsc/constraints/reach/<model>.json holds, in the arm base's frame (origin at the bottom
+prsc/constraints/<model>_reach.json holds, in the arm base's frame (origin at the bottom
 centre of the Robot box, +y ahead, +z up), convex cells inside the set of points the
 tool centre reaches with the gripper pointing down (the handover's grasp). It is
 computed once from the arm's kinematics by `python -m prsc.backends.reach` (IK over a
@@ -20,13 +20,13 @@ from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope
 
-DATA = Path(__file__).resolve().parent / "reach"
+DATA = Path(__file__).resolve().parent
 
 
 @functools.lru_cache(maxsize=None)
 def reach_cell(model: str) -> tuple[np.ndarray, np.ndarray] | None:
     """(A, b) of the model's convex cell in its base frame, or None when prsc has no data for it."""
-    path = DATA / f"{model}.json"
+    path = reach_file(model)
     if not path.is_file():
         return None
     data = json.loads(path.read_text(encoding="utf-8"))
@@ -34,9 +34,14 @@ def reach_cell(model: str) -> tuple[np.ndarray, np.ndarray] | None:
     return np.array(cell["A"], dtype=float), np.array(cell["b"], dtype=float)
 
 
+def reach_file(model: str) -> Path:
+    """Where a robot model's reachable-set data lives."""
+    return DATA / f"{model}_reach.json"
+
+
 def known_models() -> list[str]:
     """Robot models with reachable-set data."""
-    return sorted(p.stem for p in DATA.glob("*.json"))
+    return sorted(p.name[: -len("_reach.json")] for p in DATA.glob("*_reach.json"))
 
 
 def rows_reachable(robot: object, label: int, span: Span | None) -> Polytope:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from prsc.constraints import lower_program
-from prsc.constraints.reach import DATA, reach_cell
+from prsc.constraints.reach import reach_cell, reach_file
 from prsc.errors import PrscError
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import prepare_sampler
@@ -37,7 +37,7 @@ def _points(a: np.ndarray, b: np.ndarray, n: int, seed: int) -> np.ndarray:
 def test_the_cell_is_what_the_script_derives_from_its_ik_rays():
     from prsc.backends import reach
 
-    data = json.loads((DATA / "panda.json").read_text(encoding="utf-8"))
+    data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
     rays = {(k, j): (None if lo is None else (lo, hi)) for k, j, lo, hi in data["rays"]}
     for k in range(len(data["heights"])):
         rays[k, reach.SECTORS] = rays[k, 0]
@@ -52,7 +52,7 @@ def test_points_in_the_cell_are_reached_top_down_and_points_past_it_are_not(arm)
     assert all(arm.reaches(p) for p in inside), "a point of the shipped cell is out of the arm's reach"
     # The same test fails on a wrong cell: pushed 30 cm out, the part past the longest
     # radius the IK scan found (plus 5 cm) is out of reach.
-    data = json.loads((DATA / "panda.json").read_text(encoding="utf-8"))
+    data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
     longest = max(hi for _, _, lo, hi in data["rays"] if hi is not None)
     outer = a[:, :2].any(axis=1) & (b > 0)
     candidates = _points(a, b + np.where(outer, 0.3, 0.0), 400, seed=2)

@@ -587,13 +587,13 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
     raise Unknown(f"the checker has no test for {type(spec).__name__}")
 
 
-REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints" / "reach"
+REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints"
 
 
 def _outside_reach(robot: Body, p: np.ndarray) -> str | None:
     """Whether p is in the robot model's reachable cells, read from the shipped data file itself."""
     model = robot.data.get("properties", {}).get("model") or robot.data.get("model")
-    path = REACH_DATA / f"{model}.json"
+    path = REACH_DATA / f"{model}_reach.json"
     if not path.is_file():
         raise Unknown(f"no reach data for model {model!r}")
     data = json.loads(path.read_text(encoding="utf-8"))
