@@ -162,8 +162,6 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(format_program(compile_program(args.file, args.include)))
         sys.stdout.write("\n")
         return 0
-    from prsc.sampling import compile_sampler
-
     if args.json:
         from prsc.constraints import lower_program
         from prsc.constraints.export import constraint_ir
@@ -172,6 +170,8 @@ def run(args: argparse.Namespace) -> int:
         cprog = lower_program(compile_program(args.file, args.include))
         sys.stdout.write(json.dumps(constraint_ir(cprog), indent=1, allow_nan=False) + "\n")
         return 0
+    from prsc.sampling import compile_sampler
+
     sampler = compile_sampler(args.file, args.include)
     if args.stage == "scene":
         sys.stdout.write(json.dumps(sampler.scene(args.seed, args.index), indent=2, allow_nan=False) + "\n")

@@ -5,8 +5,9 @@ Three cases, decided by the constraint stage:
 - anchored: the non-static rows move rigidly with one earlier object (e.g. `on tr_1`):
   prepared once with that object at the origin, translated by its position per scene
   (when the static rows, e.g. the workspace, do not cut the translated region);
-- general: rows built per scene; a point (`at`, a rule the constraint stage marks as
-  fixing a point) is solved directly, anything else is prepared (vertex enumeration + triangulation), with a small cache on the exact rows.
+- general: rows built per scene; a point (`at`: the region's `point_rule`) is checked
+  directly, anything else is prepared (vertex enumeration + triangulation), with a
+  small cache on the exact rows.
 The sample is a function of the scene's rows and random stream only, never of which
 scenes filled a cache first.
 """

@@ -15,8 +15,8 @@ from prsc.constraints.diagnostics import numeric_failure
 from prsc.constraints.model import COLLISION, CONTAINMENT, REQUIRE, ConstraintProgram, RequireCheck, RowLabel
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
-from prsc.sampling.collisions import PlacedBox, first_hit, near
 from prsc.sampling.baseline import baseline_region
+from prsc.sampling.collisions import PlacedBox, first_hit, near
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.regions import RegionProvider, violated_rule
 from prsc.sampling.runtime import build_runtimes, draw_soft_requires, evaluate_params
