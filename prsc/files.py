@@ -137,12 +137,14 @@ def is_temporary_name(name: str, of: str | None = None) -> bool:
     return bool(found) and (of is None or found.group("name") == of)
 
 
-def remove_stale_temporaries(folder: Path | str, recursive: bool = False, of: str | None = None) -> int:
+def remove_stale_temporaries(folder: Path | str, recursive: bool = False, of: str | None = None,
+                             min_age: float = STALE_SECONDS) -> int:
     """Remove the temporaries of writers that no longer run in `folder`; returns how many.
 
     Only names of this module's pattern (for the output named `of`, when given) whose
-    lock can be taken (no live writer holds it) and that are older than STALE_SECONDS
-    are removed: nothing else is touched."""
+    lock can be taken (no live writer holds it) and that are older than `min_age` seconds
+    are removed: nothing else is touched. A caller that has seen every writer end may
+    pass min_age 0."""
     removed = 0
     now = time.time()
     walk = os.walk(folder) if recursive else [next(os.walk(folder), (str(folder), [], []))]
@@ -154,7 +156,7 @@ def remove_stale_temporaries(folder: Path | str, recursive: bool = False, of: st
             if name in dirs:
                 dirs.remove(name)  # never walk into a temporary
             try:
-                if now - path.lstat().st_mtime < STALE_SECONDS or path.is_symlink():
+                if now - path.lstat().st_mtime < min_age or path.is_symlink():
                     continue
                 handle = os.open(path, os.O_RDONLY | (os.O_DIRECTORY if path.is_dir() else 0))
             except OSError:

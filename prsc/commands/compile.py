@@ -10,21 +10,17 @@ a temporary name and renamed, so an interrupted or failed run leaves no half-wri
 file; a re-run with the same spec and seed skips the scenes already written. FILE may
 also be scene JSON (a `.json` document or `.jsonl` lines, e.g. from `prsc sample`).
 
-One run at a time writes a folder (a second one is refused). Each file is recorded in
-`manifest.jsonl` the moment it is in place, and `manifest.json` (the whole list) is
-rewritten every few seconds and at the end, when it absorbs `manifest.jsonl`: after a
-kill, the two together list every finished file. prsc deletes only files its manifest
-lists, and writes a changed spec or seed into a folder of other scenes only with --force.
+One run at a time writes a folder, and prsc deletes only files its manifest lists
+(prsc.commands.output_folder); it writes a changed spec or seed into a folder of other
+scenes only with --force. Scenes come from prsc.commands.scene_sources.
 """
 
 from __future__ import annotations
 
 import argparse
-import fcntl
 import functools
 import hashlib
 import itertools
-import json
 import os
 import shutil
 import sys
@@ -36,15 +32,13 @@ from typing import Any, Callable, Iterable, Sequence
 
 from prsc.commands.executors import Executor, LocalExecutor, add_executor_arguments, make_executor, worker_count
 from prsc.commands.outputs import write_error
-from prsc.errors import PrscError, Span
+from prsc.commands.output_folder import (
+    CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
+    lock_folder, output_root, prepare_root, record_file, remove_listed, write_manifest,
+)
+from prsc.commands.scene_sources import read_input, read_scene_file, spec_sampler
+from prsc.errors import PrscError
 
-MANIFEST = "manifest.json"
-JOURNAL = "manifest.jsonl"  # one line per file put in place since manifest.json was written
-LOCK = ".prsc-lock"
-MANIFEST_FORMAT = "prsc-manifest"
-DEFAULT_WIDTH = 5
-MAX_JSON_DEPTH = 100  # reported when a scene file is nested too deeply for Python's JSON reader
-CHECKPOINT_SECONDS = 2.0  # manifest.json is rewritten at most this often during a run
 
 
 def add_parser(subparsers: Any) -> None:
@@ -66,97 +60,7 @@ def add_parser(subparsers: Any) -> None:
     add_executor_arguments(parser)
 
 
-# ------------------------------------------------------------------ scene sources
-
-
-def _read_input(path: Path) -> bytes:
-    """The bytes of an input file, or a PrscError saying why it cannot be read."""
-    try:
-        return path.read_bytes()
-    except IsADirectoryError:
-        raise PrscError(f"{path} is a directory, not a spec or scene file") from None
-    except OSError as error:
-        raise PrscError(f"cannot read {path}: {os.strerror(error.errno) if error.errno else error}") from None
-
-
-def _read_scene_file(path: Path, data: bytes | None = None) -> list[dict]:
-    """Scenes of a .json (one scene or a list) or .jsonl file, each validated.
-
-    Validated here, before any output is written, so that an error points into the file
-    (line of a .jsonl, position in a list) rather than surfacing halfway through a run."""
-    from prsc.backends.scene import parse_scene
-    from prsc.syntax import decode_text
-
-    text = decode_text(_read_input(path) if data is None else data, str(path))
-
-    def invalid(error: json.JSONDecodeError, line: int) -> PrscError:
-        return PrscError(f"invalid JSON: {error.msg}", Span(str(path), line, error.colno, line, error.colno + 1))
-
-    def too_deep(document: str, first_line: int) -> PrscError:
-        line, column = _nesting_place(document, MAX_JSON_DEPTH)
-        return PrscError(f"JSON nested more than {MAX_JSON_DEPTH} levels deep",
-                         Span(str(path), first_line + line - 1, column, first_line + line - 1, column + 1))
-
-    # (line number, scene): split on "\n" only, as the error renderer counts lines.
-    found: list[tuple[int | None, object]] = []
-    listed = True  # several scenes: name the one at fault
-    if path.suffix == ".jsonl":
-        for number, line in enumerate(text.split("\n"), start=1):
-            if line.strip():
-                try:
-                    found.append((number, json.loads(line)))
-                except json.JSONDecodeError as error:
-                    raise invalid(error, number) from None
-                except RecursionError:
-                    raise too_deep(line, number) from None
-    else:
-        try:
-            loaded = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise invalid(error, error.lineno) from None
-        except RecursionError:
-            raise too_deep(text, 1) from None
-        listed = isinstance(loaded, list)
-        found = [(None, s) for s in loaded] if listed else [(None, loaded)]
-    if not found:
-        raise PrscError(f"{path}: no scenes in the file")
-    for k, (line, scene) in enumerate(found):
-        try:
-            parse_scene(scene)  # type: ignore[arg-type]
-        except PrscError as error:
-            message = error.message.removeprefix("scene JSON: ")  # the file name says as much
-            if line is not None:
-                raise PrscError(message, Span(str(path), line, 1, line, 2)) from None
-            raise PrscError(f"{path}: {f'scene {k}: ' if listed else ''}{message}") from None
-    return [scene for _, scene in found]  # type: ignore[misc]
-
-
-def _nesting_place(text: str, limit: int) -> tuple[int, int]:
-    """(line, column) of the bracket that opens level `limit + 1` of a JSON text (strings skipped)."""
-    depth, line, column, in_string, escaped = 0, 1, 0, False, False
-    for char in text:
-        column += 1
-        if char == "\n":
-            line, column = line + 1, 0
-        elif in_string:
-            escaped, in_string = (False, True) if escaped else (char == "\\", char != '"')
-        elif char == '"':
-            in_string = True
-        elif char in "[{":
-            depth += 1
-            if depth > limit:
-                return line, column
-        elif char in "]}":
-            depth -= 1
-    return 1, 1
-
-
-def _spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = ()) -> Callable[[int], dict]:
-    """Scene k of a .prs spec as scene JSON (the sampler is imported only when needed)."""
-    from prsc.sampling import compile_sampler
-
-    sampler = compile_sampler(spec, include_dirs=include_dirs)
-    return lambda index: sampler.scene(seed=seed, index=index)
+# ------------------------------------------------------------------ jobs
 
 
 @dataclass
@@ -182,7 +86,7 @@ class Job:
         if self.scenes is not None:
             return self.scenes[index]
         if self._sampler is None:
-            self._sampler = _spec_sampler(self.spec, self.seed, self.include_dirs)
+            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs)
         return self._sampler(index)
 
     def __getstate__(self) -> dict:
@@ -199,16 +103,6 @@ class Job:
 
 
 # ------------------------------------------------------------------ one scene
-
-
-def _record(root: Path, index: int, target: str, rel: str) -> None:
-    """Append one finished file to the journal: a single O_APPEND write, so lines never interleave."""
-    line = json.dumps({"index": index, "files": {target: rel}}, separators=(",", ":")) + "\n"
-    handle = os.open(root / JOURNAL, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
-    try:
-        os.write(handle, line.encode())
-    finally:
-        os.close(handle)
 
 
 def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda index, target: False
@@ -248,7 +142,7 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
                     atomic_write_tree(path, data)
                 else:
                     atomic_write(path, data)
-                _record(root, index, target, files[target])
+                record_file(root, index, target, files[target])
             except OSError as error:
                 raise write_error(error, path) from None
     from prsc.backends.bodies import UnknownModelWarning
@@ -304,140 +198,6 @@ def _run_parallel(job: Job, indices: Iterable[int], executor: Executor,
     executor.map(_worker_render, (job, listed), indices, collect)
 
 
-# ------------------------------------------------------------------ output folder
-
-
-def _output_root(output: Path, path: Path) -> Path:
-    """`output/<stem>`: the stem must name a folder inside `output`, never `output` itself or its parent."""
-    stem = path.stem
-    if stem in ("", ".", "..") or "/" in stem or "\\" in stem or not stem.isprintable():
-        raise PrscError(f"cannot name an output folder after {path} (its name without the suffix is {stem!r}); "
-                        "rename the file")
-    return output / stem
-
-
-def _prepare_root(root: Path, targets: Iterable[str]) -> None:
-    """Create `root/<target>/`, with clear errors for a broken or unwritable path."""
-    try:
-        for folder in [root, root / "assets"] + [root / t for t in targets]:
-            if folder.exists() and not folder.is_dir():
-                raise PrscError(f"output path {folder} exists and is not a folder")
-            folder.mkdir(parents=True, exist_ok=True)
-        if not os.access(root, os.W_OK):
-            raise PrscError(f"cannot write to output folder {root}: permission denied")
-    except OSError as error:
-        raise PrscError(f"cannot create output folder {error.filename or root}: {os.strerror(error.errno) if error.errno else error}") from None
-
-
-def _lock_folder(root: Path) -> int:
-    """An exclusive lock on the output folder for this run (released when the process and its workers end)."""
-    try:
-        handle = os.open(root / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError as error:
-        raise write_error(error, root / LOCK) from None
-    try:
-        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        os.close(handle)
-        raise PrscError(f"output folder {root} is being written by another prsc run; "
-                        "wait for it to finish or choose another output folder") from None
-    return handle
-
-
-def _entry_files(root: Path, entry: Any, where: str) -> tuple[int, dict[str, str]]:
-    """(index, target -> relative path) of one manifest entry, each path exactly a name this
-    prsc gives (`<target>/<zero-padded index><suffix>`): anything else is not prsc's."""
-    from prsc.backends import TARGETS
-
-    def bad(why: str) -> PrscError:
-        return PrscError(f"{root / MANIFEST} is not a prsc manifest ({where}: {why}); prsc will not write into this "
-                         "folder: remove the manifest or choose another output folder")
-
-    if not isinstance(entry, dict):
-        raise bad(f"expected an object, got {json.dumps(entry)[:60]}")
-    index, files = entry.get("index"), entry.get("files")
-    if isinstance(index, bool) or not isinstance(index, int) or index < 0:
-        raise bad(f"index {index!r} is not a scene number")
-    if not isinstance(files, dict):
-        raise bad(f"scene {index}: files is not an object")
-    for target, rel in files.items():
-        if target not in TARGETS or not isinstance(rel, str):
-            raise bad(f"scene {index}: {target!r}: {rel!r} is not an output of prsc")
-        suffix = TARGETS[target].suffix
-        folder, _, name = rel.partition("/")
-        digits = name[: len(name) - len(suffix)] if suffix else name
-        if folder != target or not name.endswith(suffix) or not digits.isdigit() or not digits.isascii() \
-                or int(digits) != index or len(digits) < DEFAULT_WIDTH:
-            raise bad(f"scene {index}: {target!r}: {rel!r} is not an output of prsc")
-    return index, dict(files)
-
-
-def _load_manifest(root: Path) -> tuple[dict | None, dict[int, dict[str, str]]]:
-    """The folder's manifest header and its entries (manifest.json and then the journal), validated."""
-    path = root / MANIFEST
-    if not path.exists():
-        return None, {}
-    try:
-        manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, UnicodeDecodeError, RecursionError) as error:
-        raise PrscError(f"{path} is unreadable ({str(error)[:200]}); remove it or choose another output folder") from None
-    if not isinstance(manifest, dict) or manifest.get("format", MANIFEST_FORMAT) != MANIFEST_FORMAT \
-            or not isinstance(manifest.get("scenes"), list):
-        raise PrscError(f"{path} is not a prsc manifest; remove it or choose another output folder")
-    entries: dict[int, dict[str, str]] = {}
-    for k, entry in enumerate(manifest["scenes"]):
-        index, files = _entry_files(root, entry, f"scenes[{k}]")
-        entries.setdefault(index, {}).update(files)
-    _absorb_journal(root, entries)
-    return manifest, entries
-
-
-def _absorb_journal(root: Path, entries: dict[int, dict[str, str]]) -> None:
-    """Add the files the journal records to `entries` (validated as manifest entries)."""
-    try:
-        journal = (root / JOURNAL).read_bytes()
-    except FileNotFoundError:
-        return
-    except OSError as error:
-        raise PrscError(f"cannot read {root / JOURNAL}: {os.strerror(error.errno) if error.errno else error}") from None
-    lines = journal.split(b"\n")
-    for number, line in enumerate(lines[:-1], start=1):  # a last line without "\n" was cut by a kill
-        try:
-            entry = json.loads(line)
-        except ValueError:
-            entry = None
-        index, files = _entry_files(root, entry, f"{JOURNAL} line {number}")
-        entries.setdefault(index, {}).update(files)
-
-
-def _remove_listed(root: Path, entries: dict[int, dict[str, str]]) -> None:
-    """Delete the files a validated manifest lists (outputs of another spec or seed), and nothing else."""
-    try:
-        for files in entries.values():
-            for rel in files.values():
-                path = root / rel
-                if path.parent.is_symlink():  # prsc made <target>/ a folder: this one leads elsewhere
-                    raise PrscError(f"{path.parent} is a symbolic link, not the folder prsc made; "
-                                    "remove it or choose another output folder")
-                if path.is_dir() and not path.is_symlink():
-                    shutil.rmtree(path)
-                elif path.exists() or path.is_symlink():
-                    path.unlink()
-        (root / JOURNAL).unlink(missing_ok=True)
-    except OSError as error:
-        raise PrscError(f"cannot remove the earlier scenes in {root}: "
-                        f"{error.filename}: {os.strerror(error.errno) if error.errno else error}") from None
-
-
-def _write_manifest(root: Path, manifest: dict) -> None:
-    from prsc.files import atomic_write
-
-    try:
-        atomic_write(root / MANIFEST, json.dumps(manifest, indent=1) + "\n")
-    except OSError as error:
-        raise write_error(error, root / MANIFEST) from None
-
-
 # ------------------------------------------------------------------ the command
 
 
@@ -475,11 +235,11 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     if not output:
         raise PrscError("the output folder path is empty")
     path = Path(file)
-    root = _output_root(Path(output), path)
+    root = output_root(Path(output), path)
     program: Any = None  # the spec's IR, for errors a backend reports by object
     if path.suffix in (".json", ".jsonl"):
-        data = _read_input(path)
-        scenes: list[dict] | None = _read_scene_file(path, data)
+        data = read_input(path)
+        scenes: list[dict] | None = read_scene_file(path, data)
         sources = hashlib.sha256(data)
         n = len(scenes) if not n else min(n, len(scenes))
         sampler = None
@@ -494,19 +254,19 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         compiled = compile_sampler(str(file), include_dirs=include_dirs)
         program = compiled.program
         sampler = functools.partial(compiled.scene, seed)
-        data = _read_input(path)
+        data = read_input(path)
         sources = hashlib.sha256(data)
         for imported in compiled.program.source_files[1:]:
             # The scenes also depend on every imported file (those found through --include
             # too): a change there makes them stale.
-            sources.update(_read_input(Path(imported)))
+            sources.update(read_input(Path(imported)))
     if executor is None:
         jobs = worker_count(jobs)
     width = max(DEFAULT_WIDTH, len(str(max(n - 1, 0))))
     # The topmost folder this run creates: removed again if the run fails before any scene.
     created = next((p for p in (*reversed(root.absolute().parents), root.absolute()) if not p.exists()), None)
-    _prepare_root(root, targets)
-    lock = _lock_folder(root)
+    prepare_root(root, targets)
+    lock = lock_folder(root)
     try:
         return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, data, sources, scenes,
                                sampler, width, created, meshes_anywhere, executor)
@@ -534,7 +294,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     remove_stale_temporaries(root, recursive=True)
     digest = hashlib.sha256(data).hexdigest()
     sources_digest = sources.hexdigest()
-    manifest, entries = _load_manifest(root)
+    manifest, entries = load_manifest(root)
     if manifest is not None and (
         manifest.get("spec_sha256") != digest or manifest.get("sources_sha256") != sources_digest
         or manifest.get("seed") != seed
@@ -543,12 +303,12 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
             was = f"seed {manifest.get('seed')!r} of {manifest.get('spec', 'another spec')}"
             raise PrscError(f"{root} holds {len(entries)} scenes of another spec or seed ({was}); "
                             "pass --force to replace them, or choose another output folder")
-        _remove_listed(root, entries)
+        remove_listed(root, entries)
         manifest, entries = None, {}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
               include_dirs=tuple(include_dirs), sources=sources_digest, adopt_unlisted=manifest is not None,
               meshes_anywhere=meshes_anywhere, _sampler=sampler)
-    listed = _Listed(root, {k: dict(v) for k, v in entries.items()})
+    listed = Listed(root, {k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
         # Lazy: -n 10**12 neither builds a list nor checks a file before the first scene.
@@ -574,7 +334,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
             bar.advance(task)
         if time.monotonic() > next_checkpoint[0]:
             started = time.monotonic()
-            _write_manifest(root, manifest_now())
+            write_manifest(root, manifest_now())
             # A huge manifest is rewritten less often: at most 5 % of the run goes to it.
             next_checkpoint[0] = time.monotonic() + max(CHECKPOINT_SECONDS, 20 * (time.monotonic() - started))
 
@@ -590,7 +350,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         }
 
     # Written first too: a re-run after an interruption then knows whose files these are.
-    _write_manifest(root, manifest_now())
+    write_manifest(root, manifest_now())
     try:
         if bar:
             bar.start()
@@ -606,38 +366,24 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         else:
             _run_parallel(job, pending, executor, done, listed)
     except BaseException:
-        remove_stale_temporaries(root, recursive=True)
+        # Local workers have been stopped and joined (and this folder's lock keeps other runs
+        # out), so no writer is left to lock a fresh temporary: remove them whatever their
+        # age. Ray cancels its tasks without waiting, so there the usual age applies.
+        joined = executor is None or isinstance(executor, LocalExecutor)
+        remove_stale_temporaries(root, recursive=True, **({"min_age": 0} if joined else {}))
         if created is not None and not any(entries.values()) and not (root / JOURNAL).exists():
             shutil.rmtree(created, ignore_errors=True)  # a failed first run leaves nothing behind
             raise
         try:  # best effort: record the scenes that were completed (the journal keeps them otherwise)
-            _close_manifest(root, entries, manifest_now)
+            close_manifest(root, entries, manifest_now)
         except PrscError:
             pass
         raise
     finally:
         if bar:
             bar.stop()
-    _close_manifest(root, entries, manifest_now)
+    close_manifest(root, entries, manifest_now)
     return root
-
-
-def _close_manifest(root: Path, entries: dict[int, dict[str, str]], manifest_now: Callable[[], dict]) -> None:
-    """Write manifest.json with every journalled file (the workers have stopped), then drop the journal."""
-    _absorb_journal(root, entries)
-    _write_manifest(root, manifest_now())
-    (root / JOURNAL).unlink(missing_ok=True)  # manifest.json now holds every line of it
-
-
-@dataclass
-class _Listed:
-    """Whether the manifest lists a scene's file for a target (picklable, for the workers)."""
-
-    root: Path
-    entries: dict[int, dict[str, str]]
-
-    def __call__(self, index: int, target: str) -> bool:
-        return target in self.entries.get(index, {})
 
 
 def run(args: argparse.Namespace) -> int:

@@ -8,6 +8,10 @@ produced it, the region's dimension and length/area/volume, how it is cached, an
 requires checked by rejection. Rows that depend on random values are shown as drawn in
 scene --index of --seed. --stage scene: scene --index of --seed as scene JSON, indented
 (the same scene `prsc sample` writes on one line).
+
+--json (with --stage constraints): the constraint IR itself as JSON, one entry per rule
+(orientation, position and require) with its kind, label, source line, arguments and,
+when known at compile time, its rows (with the anchor object they move with).
 """
 
 from __future__ import annotations
@@ -36,6 +40,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--stage", choices=STAGES, default="constraints", help="what to print (default constraints)")
     parser.add_argument("--seed", type=int, default=0, help="seed of the scene whose random values are shown (default 0)")
     parser.add_argument("--index", type=int, default=0, help="index of that scene (default 0)")
+    parser.add_argument("--json", action="store_true", help="print the constraint IR as JSON (constraints stage)")
 
 
 def _linear(a: np.ndarray) -> str:
@@ -115,7 +120,7 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
         }.get(mode, mode)
         out.append(f"  region: {cache}")
         half = np.array(obj.dims) * 0.5
-        from prsc.constraints.model import Support
+        from prsc.constraints.support import Support
 
         if plan.orientation is not None and plan.orientation.after_position:
             support = Support(None, half, plan.orientation.bound_mode)
@@ -141,6 +146,10 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Print the requested stage."""
+    if args.json and args.stage != "constraints":
+        from prsc.errors import PrscError
+
+        raise PrscError(f"--json prints the constraints stage (the scene stage is JSON already), not --stage {args.stage}")
     if args.stage == "syntax":
         from prsc.syntax import parse_file
         from prsc.syntax.format import format_ast
@@ -152,6 +161,14 @@ def run(args: argparse.Namespace) -> int:
 
         sys.stdout.write(format_program(compile_program(args.file, args.include)))
         sys.stdout.write("\n")
+        return 0
+    if args.json:
+        from prsc.constraints import lower_program
+        from prsc.constraints.export import constraint_ir
+        from prsc.ir import compile_program
+
+        cprog = lower_program(compile_program(args.file, args.include))
+        sys.stdout.write(json.dumps(constraint_ir(cprog), indent=1, allow_nan=False) + "\n")
         return 0
     from prsc.sampling import compile_sampler
 

@@ -37,12 +37,12 @@ def add_parser(subparsers: Any) -> None:
 
 def _scenes(file: str, n: int, seed: int, include_dirs: Sequence[str] = ()) -> list[dict]:
     """The first n scenes of a spec (sampled) or of scene JSON (read)."""
-    from prsc.commands.compile import _read_scene_file, _spec_sampler
+    from prsc.commands.scene_sources import read_scene_file, spec_sampler
 
     path = Path(file)
     if path.suffix in (".json", ".jsonl"):
-        return _read_scene_file(path)[:n]
-    sample = _spec_sampler(file, seed, include_dirs)
+        return read_scene_file(path)[:n]
+    sample = spec_sampler(file, seed, include_dirs)
     return [sample(k) for k in range(n)]
 
 

@@ -59,11 +59,11 @@ def add_parser(subparsers) -> None:
 def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: Sequence[str]) -> list[dict]:
     """The scenes a controller's `check` sees before anything is written: every scene of a JSON
     input, the first of a spec (all scenes of a spec have the same objects and classes)."""
-    from prsc.commands.compile import _read_scene_file, _spec_sampler
+    from prsc.commands.scene_sources import read_scene_file, spec_sampler
 
     if source.suffix in (".json", ".jsonl"):
-        return _read_scene_file(source)[:count or None]
-    return [_spec_sampler(str(source), seed, include_dirs)(0)]
+        return read_scene_file(source)[:count or None]
+    return [spec_sampler(str(source), seed, include_dirs)(0)]
 
 
 def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:

@@ -65,37 +65,3 @@ class SceneContext:
                 self.draws.pop(key, None)
             else:
                 self.variables.pop(key, None)
-
-
-class NotStatic(Exception):
-    """Raised by StaticContext when a value would need a random draw."""
-
-
-class _RaisingDict(dict):
-    """A memo that refuses to be read or written: any random value makes a probe fail."""
-
-    def get(self, key: Any, default: Any = None) -> Any:
-        raise NotStatic
-
-    def __setitem__(self, key: Any, value: Any) -> None:
-        raise NotStatic
-
-
-class StaticContext(SceneContext):
-    """A context for compile-time probes: the objects known so far, and no randomness.
-
-    Evaluating a closure against it either gives the value it has in every scene or
-    raises NotStatic (or a PrscError about an object not known at compile time).
-    """
-
-    def __init__(self, objects: dict[str, ObjectValue]) -> None:
-        super().__init__(None)  # type: ignore[arg-type]
-        self.draws = _RaisingDict()
-        self.variables = _RaisingDict()
-        self.objects = dict(objects)
-
-    def uniform(self) -> float:
-        raise NotStatic
-
-    def normal(self) -> float:
-        raise NotStatic

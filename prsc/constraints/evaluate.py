@@ -3,7 +3,7 @@
 A subexpression whose value cannot change from scene to scene (literals, arithmetic on
 them, properties of objects whose value is already known at compile time) is evaluated
 once here; everything else becomes a small closure. Distributions are memoised per scene
-by draw_id (LANGUAGE.md section 3: one draw per scene, shared by all uses).
+by draw_id (docs/language.md section 8: one draw per scene, shared by all uses).
 """
 
 from __future__ import annotations
@@ -14,28 +14,22 @@ from operator import attrgetter
 from typing import Any, Callable
 
 import numpy as np
-from scipy.special import ndtr, ndtri
 
 from prsc.constraints import regions
 from prsc.constraints.context import SceneContext
-from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
-from prsc.errors import PrscError, Span
+from prsc.constraints.distributions import sampler_for
+from prsc.constraints.operations import (
+    arith_operand, as_number, attribute, binary, compare, describe, error_at, face_point, finite, is_number, is_vector,
+    relative_to, truthy,
+)
+from prsc.constraints.values import ObjectValue, RegionValue
+from prsc.errors import PrscError
 from prsc.ir import model as ir
 
 Fn = Callable[[SceneContext], Any]
 _MISSING = object()
 _DRAWS = attrgetter("draws")  # the context's memo of distribution values, by draw id
 _VARIABLES = attrgetter("variables")  # and of random global variables, by name
-
-# Unit offsets of face-point words in the object's local frame.
-_FACE_AXES = {
-    "top": (2, 1.0),
-    "bottom": (2, -1.0),
-    "front": (1, 1.0),
-    "back": (1, -1.0),
-    "right": (0, 1.0),
-    "left": (0, -1.0),
-}
 
 _MATH: dict[str, Callable[..., float]] = {
     "sin": math.sin,
@@ -86,155 +80,6 @@ class StaticFacts:
         return self.props.get(name, {}).get(prop, _MISSING)
 
 
-# ---------------------------------------------------------------- runtime helpers
-
-
-def _error(message: str, span: Span | None) -> PrscError:
-    return PrscError(message, span)
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool)
-
-
-def _is_vector(v: Any) -> bool:
-    return isinstance(v, np.ndarray) and v.shape == (3,)
-
-
-def _arith_operand(v: Any) -> Any:
-    """Face points and objects act as their positions in arithmetic (compat)."""
-    if isinstance(v, (OrientedPoint, ObjectValue)):
-        return as_position(v)
-    return v
-
-
-def binary(op: str, a: Any, b: Any, span: Span | None) -> Any:
-    """`a op b` for scalars, vectors and strings."""
-    if _is_number(a) and _is_number(b):
-        return _finite(_binary(op, a, b, span), span)
-    with np.errstate(over="ignore", invalid="ignore"):  # _finite reports an overflow, with its place
-        return _finite(_binary(op, a, b, span), span)
-
-
-def _finite(value: Any, span: Span | None) -> Any:
-    """The value of an arithmetic result, or an error at it when it overflowed to infinity.
-
-    Caught here, where the expression is known: further on an infinite coordinate or size
-    only shows as a solver failure with no location."""
-    if isinstance(value, float):
-        if not math.isfinite(value):
-            raise _error("the result is too large (it overflows to infinity)", span)
-    elif isinstance(value, np.ndarray) and not np.isfinite(value).all():
-        raise _error("the result is too large (it overflows to infinity)", span)
-    return value
-
-
-def _binary(op: str, a: Any, b: Any, span: Span | None) -> Any:
-    a = _arith_operand(a)
-    b = _arith_operand(b)
-    if _is_number(a) and _is_number(b):
-        if op == "+":
-            return a + b
-        if op == "-":
-            return a - b
-        if op == "*":
-            return a * b
-        if op == "/":
-            if b == 0:
-                raise _error("division by zero", span)
-            return a / b
-    elif _is_vector(a) and _is_vector(b) and op in "+-":
-        return a + b if op == "+" else a - b
-    elif _is_vector(a) and _is_number(b) and op in "*/":
-        if op == "/" and b == 0:
-            raise _error("division by zero", span)
-        return a * b if op == "*" else a / b
-    elif _is_number(a) and _is_vector(b) and op == "*":
-        return b * a
-    elif isinstance(a, str) and isinstance(b, str) and op == "+":
-        return a + b
-    raise _error(f"cannot apply {op!r} to {describe(a)} and {describe(b)}", span)
-
-
-def describe(v: Any) -> str:
-    """A short name of a value's kind for error messages."""
-    if isinstance(v, bool):
-        return "a bool"
-    if _is_number(v):
-        return "a number"
-    if _is_vector(v):
-        return "a vector"
-    if isinstance(v, str):
-        return "a string"
-    if isinstance(v, ObjectValue):
-        return "an object"
-    if isinstance(v, OrientedPoint):
-        return "a face point"
-    if isinstance(v, RegionValue):
-        return "a region"
-    if isinstance(v, tuple):
-        return "a list"
-    return type(v).__name__
-
-
-def compare(op: str, a: Any, b: Any, span: Span | None) -> bool:
-    """`a op b` for numbers (and ==/!= for anything)."""
-    if op in ("==", "!="):
-        if _is_vector(a) or _is_vector(b):
-            equal = _is_vector(a) and _is_vector(b) and bool(np.all(a == b))
-        else:
-            equal = a == b
-        return equal if op == "==" else not equal
-    if not (_is_number(a) and _is_number(b)):
-        raise _error(f"cannot compare {describe(a)} and {describe(b)} with {op!r}", span)
-    if op == "<":
-        return a < b
-    if op == "<=":
-        return a <= b
-    if op == ">":
-        return a > b
-    if op == ">=":
-        return a >= b
-    raise _error(f"unknown comparison {op!r}", span)
-
-
-def truthy(v: Any, span: Span | None) -> bool:
-    """A value used as a condition."""
-    if isinstance(v, bool):
-        return v
-    if _is_number(v):
-        return v != 0
-    raise _error(f"expected a condition, got {describe(v)}", span)
-
-
-def face_point(target: Any, words: tuple[str, ...], span: Span | None) -> OrientedPoint:
-    """`top back X` etc.: X.position + R_X . offset, carrying X's orientation."""
-    if not isinstance(target, ObjectValue):
-        raise _error(f"a face point needs an object, got {describe(target)}", span)
-    if target.position is None or target.rotation is None or target.dims is None:
-        raise _error(f"{target.name} is not placed yet here", span)
-    offset = [0.0, 0.0, 0.0]
-    for word in words:
-        axis, sign = _FACE_AXES[word]
-        offset[axis] = sign * target.dims[axis] * 0.5
-    return OrientedPoint(target.position + target.rotation @ np.array(offset), target.rotation)
-
-
-def relative_to(value: Any, frame: Any, span: Span | None) -> np.ndarray:
-    """`V relative to X`: X.position + R_X V for an object or face point, X + V for a vector."""
-    v = _arith_operand(value)
-    if not _is_vector(v):
-        raise _error(f"'relative to' needs a vector on its left, got {describe(value)}", span)
-    if isinstance(frame, (ObjectValue, OrientedPoint)):
-        pos = as_position(frame)
-        if pos is None or frame.rotation is None:
-            raise _error("the frame of 'relative to' is not placed yet here", span)
-        return pos + frame.rotation @ v
-    if _is_vector(frame):
-        return frame + v
-    raise _error(f"'relative to' needs an object or a vector on its right, got {describe(frame)}", span)
-
-
 def _once_per_scene(
     fn: Fn, key: Any, memo: Callable[[SceneContext], dict], remember: Callable[[SceneContext, Any, Any], None]
 ) -> Fn:
@@ -249,30 +94,6 @@ def _once_per_scene(
 
     return memoised
 
-
-def attribute(target: Any, prop: str, ctx: SceneContext | None, span: Span | None) -> Any:
-    """`target.prop` on an object, a face point or a vector."""
-    if isinstance(target, ObjectValue):
-        return target.get(prop, ctx, span)
-    if isinstance(target, OrientedPoint):
-        if prop == "position":
-            return target.position
-        if prop == "orientation":
-            return target.rotation
-        if prop in ("x", "y", "z"):
-            return float(target.position["xyz".index(prop)])
-    elif _is_vector(target):
-        if prop in ("x", "y", "z"):
-            return float(target["xyz".index(prop)])
-        if prop == "position":
-            return target
-    raise _error(f"{describe(target)} has no attribute {prop!r}", span)
-
-
-def _number(v: Any, what: str, span: Span | None) -> float:
-    if not _is_number(v):
-        raise _error(f"{what} must be a number, got {describe(v)}", span)
-    return float(v)
 
 
 # ---------------------------------------------------------------- compiler
@@ -299,7 +120,7 @@ class ExprCompiler:
     # -- leaves
     def _c_Const(self, e: ir.Const) -> Compiled:
         value = e.value
-        if _is_number(value):
+        if is_number(value):
             value = float(value)
         return constant(value)
 
@@ -307,13 +128,13 @@ class ExprCompiler:
         parts = [self.compile(c) for c in (e.x, e.y, e.z)]
         span = e.span
         if all(p.const for p in parts):
-            return constant(np.array([_number(p.value, "a vector component", span) for p in parts]))
+            return constant(np.array([as_number(p.value, "a vector component", span) for p in parts]))
         fx, fy, fz = (p.fn for p in parts)
 
         def vector(ctx: SceneContext) -> np.ndarray:
             x, y, z = fx(ctx), fy(ctx), fz(ctx)
-            if not (_is_number(x) and _is_number(y) and _is_number(z)):
-                raise _error("vector components must be numbers", span)
+            if not (is_number(x) and is_number(y) and is_number(z)):
+                raise error_at("vector components must be numbers", span)
             return np.array((x, y, z), dtype=float)
 
         return Compiled(vector, False)
@@ -331,7 +152,7 @@ class ExprCompiler:
         def obj(ctx: SceneContext) -> ObjectValue:
             value = ctx.objects.get(name)
             if value is None:
-                raise _error(f"object {name} is not placed yet here", span)
+                raise error_at(f"object {name} is not placed yet here", span)
             return value
 
         # An object whose geometry is known at compile time is a constant for folding
@@ -410,9 +231,9 @@ class ExprCompiler:
         def unary(v: Any) -> Any:
             if op == "not":
                 return not truthy(v, span)
-            v = _arith_operand(v)
-            if not (_is_number(v) or _is_vector(v)):
-                raise _error(f"cannot apply unary {op!r} to {describe(v)}", span)
+            v = arith_operand(v)
+            if not (is_number(v) or is_vector(v)):
+                raise error_at(f"cannot apply unary {op!r} to {describe(v)}", span)
             return -v if op == "-" else v
 
         if operand.const:
@@ -446,12 +267,12 @@ class ExprCompiler:
         args = [self.compile(a) for a in e.args]
 
         def call(values: list[Any]) -> float:
-            nums = [_number(v, f"an argument of {e.func}", span) for v in values]
+            nums = [as_number(v, f"an argument of {e.func}", span) for v in values]
             try:
                 result = float(func(*nums))
             except (ValueError, TypeError, OverflowError) as error:
-                raise _error(f"{e.func}: {error}", span) from error
-            return _finite(result, span)
+                raise error_at(f"{e.func}: {error}", span) from error
+            return finite(result, span)
 
         if all(a.const for a in args):
             return constant(call([a.value for a in args]))
@@ -461,7 +282,7 @@ class ExprCompiler:
     def _c_Distribution(self, e: ir.Distribution) -> Compiled:
         args = [self.compile(a) for a in e.args]
         weights = [self.compile(w) for w in e.weights]
-        draw = _sampler_for(e, [a.fn for a in args], [w.fn for w in weights])
+        draw = sampler_for(e, [a.fn for a in args], [w.fn for w in weights])
         return Compiled(_once_per_scene(draw, e.draw_id, _DRAWS, SceneContext.remember_draw), False)
 
     def _c_RegionExpr(self, e: ir.RegionExpr) -> Compiled:
@@ -487,83 +308,9 @@ class ExprCompiler:
                 return regions.everything()
             if kind == "empty":
                 return regions.empty()
-            raise _error(f"unknown region kind {kind!r}", span)
+            raise error_at(f"unknown region kind {kind!r}", span)
 
         if all(a.const for a in args):
             return constant(build([a.value for a in args]))
         fns = [a.fn for a in args]
         return Compiled(lambda ctx: build([f(ctx) for f in fns]), False)
-
-
-def _sampler_for(e: ir.Distribution, args: list[Fn], weights: list[Fn]) -> Fn:
-    """The draw function of one distribution node (no memoisation)."""
-    kind, span = e.kind, e.span
-
-    def num(f: Fn, ctx: SceneContext, what: str) -> float:
-        return _number(f(ctx), what, span)
-
-    if kind == "range":
-        lo_f, hi_f = args
-
-        def draw_range(ctx: SceneContext) -> float:
-            lo, hi = num(lo_f, ctx, "a range bound"), num(hi_f, ctx, "a range bound")
-            if hi < lo:
-                raise _error(f"empty range ({lo}, {hi})", span)
-            return lo + (hi - lo) * ctx.uniform()
-
-        return draw_range
-    if kind == "normal":
-        mean_f, sd_f = args
-
-        def draw_normal(ctx: SceneContext) -> float:
-            mean, sd = num(mean_f, ctx, "a mean"), num(sd_f, ctx, "a standard deviation")
-            if sd < 0:
-                raise _error("a standard deviation must be >= 0", span)
-            return mean + sd * ctx.normal()
-
-        return draw_normal
-    if kind == "truncnormal":
-        mean_f, sd_f, lo_f, hi_f = args
-
-        def draw_truncnormal(ctx: SceneContext) -> float:
-            mean, sd = num(mean_f, ctx, "a mean"), num(sd_f, ctx, "a standard deviation")
-            lo, hi = num(lo_f, ctx, "a bound"), num(hi_f, ctx, "a bound")
-            if not (sd > 0 and lo < hi):
-                raise _error("TruncatedNormal needs sd > 0 and low < high", span)
-            # Inverse CDF on [Phi(a), Phi(b)]: exact, one uniform per draw.
-            pa, pb = float(ndtr((lo - mean) / sd)), float(ndtr((hi - mean) / sd))
-            if not pb > pa:
-                raise _error("TruncatedNormal's interval has no probability mass", span)
-            value = mean + sd * float(ndtri(pa + (pb - pa) * ctx.uniform()))
-            return min(max(value, lo), hi)
-
-        return draw_truncnormal
-    if kind == "uniform":
-        if not args:
-            raise PrscError("Uniform needs at least one option", span)
-        options = args
-
-        def draw_option(ctx: SceneContext) -> Any:
-            return options[min(int(ctx.uniform() * len(options)), len(options) - 1)](ctx)
-
-        return draw_option
-    if kind == "discrete":
-        if not args or len(args) != len(weights):
-            raise PrscError("Discrete needs one weight per option", span)
-        options = args
-
-        def draw_discrete(ctx: SceneContext) -> Any:
-            w = [num(f, ctx, "a weight") for f in weights]
-            total = sum(w)
-            if any(x < 0 for x in w) or not total > 0:
-                raise _error("Discrete weights must be >= 0 and not all 0", span)
-            u = ctx.uniform() * total
-            acc = 0.0
-            for option, weight in zip(options, w):
-                acc += weight
-                if u < acc:
-                    return option(ctx)
-            return options[-1](ctx)
-
-        return draw_discrete
-    raise PrscError(f"unknown distribution {kind!r}", span)

@@ -1,9 +1,12 @@
-"""The polytope constraint IR: what the sampler consumes.
+"""The polytope constraint IR: what the sampler consumes, as data.
 
-Per object: its property closures, its orientation rule, and its position rules. A
-position rule turns the concrete values of one scene (earlier objects, draws) into
-labelled rows `A p <= b`, `C p = d` on the object's centre p; every row's integer label
-indexes ConstraintProgram.labels, which remembers the specifier text and source span.
+Per object: its property evaluators, its orientation rule and its position rules. A
+position rule is a frozen record: its kind, its arguments as IR expressions, its label
+(specifier text and source span) and, when the compiler can tell, its row template: the
+rows `A p <= b`, `C p = d` on the object's centre p with every other object it reads at
+the origin, and the one object (`anchor`) whose position moves them (None: the rows are
+the same in every scene). Analyses (analysis.py) and row building (build.py) are plain
+functions over these records.
 """
 
 from __future__ import annotations
@@ -14,9 +17,8 @@ from typing import Any, Callable
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.values import ObjectValue
+from prsc.constraints.support import Support
 from prsc.errors import Span
-from prsc.geometry.boxes import support as box_support
 from prsc.geometry.polytope import Polytope
 from prsc.ir import model as ir
 
@@ -29,6 +31,8 @@ REQUIRE = "require"
 POSITION = "position"
 DEAD_END = "dead end"
 CAUSES = (COLLISION, RELATIVE, CONTAINMENT, REQUIRE)
+
+Evaluator = Callable[[SceneContext], Any]
 
 
 @dataclass(frozen=True)
@@ -43,65 +47,64 @@ class RowLabel:
     refs: tuple[str, ...] = ()
 
 
-class Support:
-    """The support function s(n) of the object's box about its centre (LANGUAGE.md section 4).
+@dataclass(frozen=True, eq=False)
+class RowTemplate:
+    """A rule's rows with the object `anchor` at the origin; anchor None: the rows of every scene.
 
-    mode "exact": rotation known; "yaw": rotation is an unknown yaw (facing toward), so
-    use the footprint's radius horizontally (exact vertically); "free": rotation unknown,
-    use the box's circumradius.
+    In a scene where the anchor's centre is t the rows are these translated by t
+    (`A p <= b + A t`): the rule reads nothing else that changes between scenes.
     """
 
-    __slots__ = ("rotation", "half", "mode", "_radius_xy", "_radius")
-
-    def __init__(self, rotation: np.ndarray | None, half_extents: np.ndarray, mode: str = "exact") -> None:
-        self.rotation = rotation
-        self.half = np.asarray(half_extents, dtype=float)
-        self.mode = mode
-        self._radius_xy = float(np.hypot(self.half[0], self.half[1]))
-        self._radius = float(np.linalg.norm(self.half))
-
-    def __call__(self, normals: np.ndarray) -> np.ndarray:
-        """s(n) for each row of normals (m, 3); positively homogeneous in n."""
-        n = np.asarray(normals, dtype=float)
-        if self.mode == "exact":
-            return box_support(self.rotation, self.half, n)
-        if self.mode == "yaw":
-            return np.abs(n[..., 2]) * self.half[2] + np.hypot(n[..., 0], n[..., 1]) * self._radius_xy
-        return np.linalg.norm(n, axis=-1) * self._radius
-
-    def key(self) -> tuple:
-        """A hashable summary (for region caches)."""
-        rot = None if self.rotation is None else self.rotation.tobytes()
-        return (self.mode, rot, self.half.tobytes())
+    rows: Polytope
+    anchor: str | None = None
 
 
-BuildRows = Callable[[SceneContext, Support], Polytope]
+@dataclass(frozen=True, eq=False)
+class Rule:
+    """One position rule: a specifier, the workspace, a lowered require or `reachable by`.
 
-
-@dataclass(frozen=True)
-class PositionRule:
-    """One specifier (or lowered require, or the workspace) as rows on p.
-
-    `static` rules do not change between scenes (given the object's static size and
-    rotation); `rows` holds their rows, built once. `soft` is the index of a soft
-    require this rule enforces only in scenes where it is active.
+    `kind` names the row builder (build.py); `args` are the IR expressions it reads and
+    `values` their compiled evaluators, in the same order; `options` the specifier's
+    constant settings (completely, the direction word, the axis). `soft` is the index of
+    a soft require this rule enforces only in scenes where it is active.
     """
 
+    kind: str
     label_id: int
-    static: bool
-    build: BuildRows
-    rows: Polytope | None = None
+    span: Span | None
+    args: tuple[ir.Expr, ...]
+    options: tuple[tuple[str, Any], ...] = ()
+    template: RowTemplate | None = None
     soft: int | None = None
+    values: tuple[Evaluator, ...] = field(default=(), repr=False, compare=False)
+    # `completely on X`: the same rule without erosion (what the rejection baseline draws from).
+    relaxed: Rule | None = None
+
+    def option(self, name: str, default: Any = None) -> Any:
+        """The value of one option."""
+        return dict(self.options).get(name, default)
+
+    @property
+    def static(self) -> bool:
+        """Whether its rows are the same in every scene."""
+        return self.template is not None and self.template.anchor is None
+
+    @property
+    def rows(self) -> Polytope | None:
+        """The rows of a static rule (None otherwise)."""
+        return self.template.rows if self.static else None  # type: ignore[union-attr]
 
 
 @dataclass(frozen=True)
 class OrientationRule:
-    """How the object's rotation is computed; `after_position` for `facing toward` etc."""
+    """How the object's rotation is set: `facing`, `facing toward` or `with orientation`."""
 
+    kind: str  # facing | facing toward | with orientation
     label_id: int
+    arg: ir.Expr
     after_position: bool
     bound_mode: str  # Support mode to use for erosion while the rotation is unknown
-    compute: Callable[[SceneContext, ObjectValue], np.ndarray]
+    value: Evaluator = field(repr=False, compare=False)
     static_value: np.ndarray | None = None
 
 
@@ -110,7 +113,7 @@ class RequireCheck:
     """A require checked by rejection once every object it mentions is placed."""
 
     label_id: int
-    test: Callable[[SceneContext], bool]
+    test: Callable[[SceneContext], bool] = field(repr=False, compare=False)
     soft: int | None = None
 
 
@@ -118,19 +121,20 @@ class RequireCheck:
 class RegionRules:
     """The rules whose intersection is an object's region, pre-digested for caching.
 
-    `static_rows`: the static rules stacked (None if none). When every non-static rule
-    depends on the scene only through the position t of one earlier object (`anchor`)
-    and moves rigidly with it (e.g. `on tr_1`), `anchored_rows` holds those rules' rows
-    with the anchor at the origin: the scene's rows are anchored_rows translated by t.
+    `static_rows`: the static rules stacked (None if none). `anchor` / `anchored_rows`:
+    when every other rule has a template anchored at the same earlier object, their
+    rows with that object at the origin (the scene's rows are these translated by its
+    position). `point_rule`: the index of a rule fixing p to a point (`at V`), if any.
     """
 
-    rules: tuple[PositionRule, ...]
+    rules: tuple[Rule, ...]
     static_rows: Polytope | None = None
     anchor: str | None = None
     anchored_rows: Polytope | None = None
+    point_rule: int | None = None
 
     @property
-    def dynamic(self) -> tuple[PositionRule, ...]:
+    def dynamic(self) -> tuple[Rule, ...]:
         """The rules rebuilt every scene."""
         return tuple(r for r in self.rules if not r.static)
 
@@ -144,7 +148,7 @@ class ObjectPlan:
     class_name: str
     anonymous: bool
     span: Span
-    property_fns: dict[str, Callable[[SceneContext], Any]]
+    property_fns: dict[str, Evaluator]
     static_props: dict[str, Any]
     orientation: OrientationRule | None
     # Every position rule (specifiers, workspace, lowered requires): the exact region.
@@ -152,13 +156,12 @@ class ObjectPlan:
     # Requires on this object that are not linear: checked by rejection.
     checks: tuple[RequireCheck, ...]
     depends_on: tuple[str, ...]
-    # The rejection baseline's draw region: equalities and `on` surfaces (no erosion), in
-    # the workspace's bounding box; it then tests every rule of `region`.
-    base_region: RegionRules | None = None
     static_position: np.ndarray | None = None
+    # The object's support function when it is the same in every scene.
+    static_support: Support | None = None
 
     @property
-    def rules(self) -> tuple[PositionRule, ...]:
+    def rules(self) -> tuple[Rule, ...]:
         """All position rules."""
         return self.region.rules
 
@@ -182,9 +185,11 @@ class ConstraintProgram:
     # Requires that mention no object: checked once per scene before placing objects.
     scene_checks: tuple[RequireCheck, ...]
     soft_requires: tuple[SoftRequire, ...]
-    params: tuple[tuple[str, Callable[[SceneContext], Any]], ...]
+    params: tuple[tuple[str, Evaluator], ...]
     # Every require as a plain test (what the rejection baseline checks), with the index
     # of the object after which it can be evaluated (-1: before any object).
     require_tests: tuple[tuple[int, RequireCheck], ...] = field(default=())
     # Label ids of lowered requires, by the object they were lowered onto (for explain).
     lowered_requires: dict[str, tuple[int, ...]] = field(default_factory=dict)
+    # The workspace's bounding box when static (the rejection baseline draws from it).
+    workspace_box: Polytope | None = None

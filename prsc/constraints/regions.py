@@ -1,4 +1,4 @@
-"""Concrete regions from evaluated region-constructor arguments (LANGUAGE.md section 3)."""
+"""Concrete regions from evaluated region-constructor arguments (docs/language.md section 9)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ _PLANAR_TOL = 1e-9
 
 
 def rotation_of(value: Any, span: Span | None) -> np.ndarray:
-    """A rotation matrix from a compat Euler vector (LANGUAGE.md section 1) or a matrix."""
+    """A rotation matrix from a compat Euler vector (docs/language.md, `with orientation`) or a matrix."""
     arr = np.asarray(value, dtype=float) if not isinstance(value, (str, bool)) else None
     if arr is not None and arr.shape == (3, 3):
         return arr

@@ -6,6 +6,10 @@ when its rotation and size are known before its position, so e.g.
 `(right tr_1).x + 0.2 < table.x` becomes the row e_x . p <= table.x - 0.2 - width/2.
 Anything else (products of positions, `or`, functions of positions) is not lowered: the
 caller checks it by rejection.
+
+Coefficients have six columns: the target's position p, then the position t of an
+optional `anchor` object kept symbolic too, so a condition compiles to rows
+`A p + B t <= b`; with B = -A the rows move rigidly with the anchor.
 """
 
 from __future__ import annotations
@@ -16,8 +20,9 @@ from typing import Any, Callable
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.evaluate import Compiled, ExprCompiler, binary, describe, truthy
-from prsc.constraints.evaluate import face_point as _face_point_value
+from prsc.constraints.evaluate import Compiled, ExprCompiler
+from prsc.constraints.operations import binary, describe, truthy
+from prsc.constraints.operations import face_point as _face_point_value
 from prsc.constraints.values import ObjectValue, OrientedPoint, as_position
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
@@ -28,7 +33,7 @@ _NEGATE = {"<": ">=", "<=": ">", ">": "<=", ">=": "<", "==": "!=", "!=": "=="}
 
 @dataclass(frozen=True)
 class Affine:
-    """coef @ p + const: coef (3,) for a scalar, (3, 3) for a vector."""
+    """coef @ (p, t) + const: coef (6,) for a scalar, (3, 6) for a vector."""
 
     coef: np.ndarray
     const: Any
@@ -70,43 +75,47 @@ class _NotLinear(Exception):
     """The condition is not linear in the target's position."""
 
 
-def _mentions(expr: ir.Expr, target: str) -> bool:
-    return target in mentioned_objects(expr)
-
-
 class AffineCompiler:
     """Compiles a condition into rows on the target object's position, or raises _NotLinear."""
 
-    def __init__(self, compiler: ExprCompiler, target: str) -> None:
+    def __init__(self, compiler: ExprCompiler, target: str, anchor: str | None = None) -> None:
         self.compiler = compiler
         self.target = target
+        self.anchor = anchor
+
+    def _symbolic(self, e: ir.Expr) -> bool:
+        """Whether e mentions the target or the anchor (whose positions stay symbolic)."""
+        names = mentioned_objects(e)
+        return self.target in names or (self.anchor is not None and self.anchor in names)
 
     # -- values: closures returning an Affine (involves p) or a plain value
     def value(self, e: ir.Expr) -> tuple[AffFn, bool]:
         """(fn, is_affine): fn(ctx) gives an Affine when is_affine, else a plain value."""
-        if not _mentions(e, self.target):
+        if not self._symbolic(e):
             c: Compiled = self.compiler.compile(e)
             return c.fn, False
-        t = self.target
         span = e.span
-        if isinstance(e, ir.PropertyRef) and isinstance(e.target, ir.ObjectRef) and e.target.name == t:
+        variable = _variable_of(e, self.target, self.anchor)
+        if variable is not None and isinstance(e, ir.PropertyRef):
+            name, block = variable
             if e.prop == "position":
-                return (lambda ctx: Affine(np.eye(3), np.zeros(3))), True
+                return (lambda ctx: Affine(block, np.zeros(3))), True
             if e.prop in ("x", "y", "z"):
-                row = np.eye(3)["xyz".index(e.prop)]
+                row = block["xyz".index(e.prop)]
                 return (lambda ctx: Affine(row, 0.0)), True
             if e.prop == "orientation":
                 raise _NotLinear
             c = self.compiler.compile(e)  # width etc.: known before the position
             return c.fn, False
-        if isinstance(e, ir.FacePoint) and isinstance(e.target, ir.ObjectRef) and e.target.name == t:
+        if variable is not None and isinstance(e, ir.FacePoint):
+            name, block = variable
             words = e.words
 
             def face(ctx: SceneContext) -> Affine:
-                obj = ctx.objects[t]
-                stand_in = ObjectValue(t, "", span, np.zeros(3), obj.rotation, obj.dims)
+                obj = ctx.objects[name]
+                stand_in = ObjectValue(name, "", span, np.zeros(3), obj.rotation, obj.dims)
                 offset = _face_point_value(stand_in, words, span).position
-                return Affine(np.eye(3), offset)
+                return Affine(block, offset)
 
             return face, True
         if isinstance(e, ir.PropertyRef):
@@ -140,19 +149,20 @@ class AffineCompiler:
         raise _NotLinear
 
     def _relative(self, e: ir.RelativeTo) -> tuple[AffFn, bool]:
-        t = self.target
-        if isinstance(e.frame, ir.ObjectRef) and e.frame.name == t and not _mentions(e.value, t):
+        variable = _variable_of(e.frame, self.target, self.anchor) if isinstance(e.frame, ir.ObjectRef) else None
+        if variable is not None and not self._symbolic(e.value):
+            name, block = variable
             vf = self.compiler.compile(e.value).fn
 
             def rel_self(ctx: SceneContext) -> Affine:
-                obj = ctx.objects[t]
+                obj = ctx.objects[name]
                 v = as_position(vf(ctx))
                 if v is None:
                     raise PrscError("'relative to' needs a vector on its left", e.span)
-                return Affine(np.eye(3), obj.rotation @ v)
+                return Affine(block, obj.rotation @ v)
 
             return rel_self, True
-        if not _mentions(e.frame, t):
+        if not self._symbolic(e.frame):
             inner, aff = self.value(e.value)
             ff = self.compiler.compile(e.frame).fn
 
@@ -209,13 +219,13 @@ class AffineCompiler:
     # -- conditions: closures returning (A rows, b, C rows, d)
     def condition(self, e: ir.Expr) -> Callable[[SceneContext], tuple[list, list, list, list]]:
         """Rows (le_rows, le_rhs, eq_rows, eq_rhs) meaning the condition holds."""
-        if not _mentions(e, self.target):
+        if not self._symbolic(e):
             f = self.compiler.compile(e).fn
             span = e.span
 
             def plain(ctx: SceneContext) -> tuple[list, list, list, list]:
                 ok = truthy(f(ctx), span)
-                return ([np.zeros(3)], [0.0 if ok else -1.0], [], [])
+                return ([np.zeros(6)], [0.0 if ok else -1.0], [], [])
 
             return plain
         if isinstance(e, ir.BoolOp) and e.op == "and":
@@ -276,21 +286,50 @@ def _lift(v: Any, is_affine: bool, span: Span) -> Affine:
     if isinstance(v, bool):
         raise PrscError("cannot use a bool in a linear condition", span)
     if isinstance(v, (int, float)):
-        return Affine(np.zeros(3), float(v))
+        return Affine(np.zeros(6), float(v))
     pos = as_position(v)
     if pos is not None and not isinstance(v, ObjectValue):
-        return Affine(np.zeros((3, 3)), np.asarray(pos, dtype=float))
+        return Affine(np.zeros((3, 6)), np.asarray(pos, dtype=float))
     raise PrscError(f"cannot use {describe(v)} in a linear condition", span)
 
 
+_BLOCKS = (np.hstack([np.eye(3), np.zeros((3, 3))]), np.hstack([np.zeros((3, 3)), np.eye(3)]))
+
+
+def _variable_of(e: ir.Expr, target: str, anchor: str | None) -> tuple[str, np.ndarray] | None:
+    """(name, coefficient block) when e is the target's or the anchor's position, a face point or the object."""
+    inner = e.target if isinstance(e, (ir.PropertyRef, ir.FacePoint)) else e
+    if not isinstance(inner, ir.ObjectRef):
+        return None
+    if inner.name == target:
+        return target, _BLOCKS[0]
+    if anchor is not None and inner.name == anchor:
+        return anchor, _BLOCKS[1]
+    return None
+
+
 def lower_condition(
-    compiler: ExprCompiler, condition: ir.Expr, target: str
+    compiler: ExprCompiler, condition: ir.Expr, target: str, anchor: str | None = None
 ) -> Callable[[SceneContext], tuple[list, list, list, list]] | None:
-    """Rows for a condition linear in `target`'s position, or None when it is not linear."""
+    """Rows (six columns: p, then the anchor's t) for a condition linear in them, or None when it is not."""
     try:
-        return AffineCompiler(compiler, target).condition(condition)
+        return AffineCompiler(compiler, target, anchor).condition(condition)
     except _NotLinear:
         return None
 
 
-__all__ = ["Affine", "lower_condition", "mentioned_objects"]
+def constant_apart_from(compiler: ExprCompiler, expr: ir.Expr, names: set[str]) -> bool:
+    """Whether every part of expr that mentions none of `names` is the same in every scene."""
+    if not (mentioned_objects(expr) & names):
+        return compiler.compile(expr).const
+    if isinstance(expr, ir.ObjectRef):
+        return True
+    for value in vars(expr).values():
+        items = value if isinstance(value, tuple) else (value,)
+        for item in items:
+            if isinstance(item, ir.Expr) and not constant_apart_from(compiler, item, names):
+                return False
+    return True
+
+
+__all__ = ["Affine", "constant_apart_from", "lower_condition", "mentioned_objects"]

@@ -1,4 +1,4 @@
-"""Position specifiers as labelled rows on the object's centre p (LANGUAGE.md section 4).
+"""Position specifiers as labelled rows on the object's centre p (docs/sampling.md, the rows table).
 
 Each function takes the concrete values of one scene and returns a Polytope whose rows
 all carry `label`. `support` is the placed object's support function s(n).

@@ -1,8 +1,8 @@
 """Pure geometry for prsc: rotations, boxes, H-polytopes, erosion, exact uniform samplers,
 oriented-box collision, free-space decomposition, hit-and-run and IIS.
 
-Imports nothing of prsc outside this package (numpy, scipy, highspy only). See
-/work/team/GEOMETRY_API.md for the API overview.
+Imports nothing of prsc outside this package (numpy, scipy, highspy only). Each module's
+docstring describes its part of the API; docs/sampling.md how the sampler uses them.
 """
 
 from __future__ import annotations

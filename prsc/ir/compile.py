@@ -23,7 +23,7 @@ BUILTIN_SPAN = Span("<builtin Object>", 1, 1, 1, 1)
 
 
 def _root_class() -> ClassInfo:
-    """`Object` with the built-in defaults of LANGUAGE.md section 6."""
+    """`Object` with the built-in defaults of docs/language.md section 11."""
     cls = ClassInfo(ROOT_CLASS, None, BUILTIN_SPAN)
     for prop, value in OBJECT_DEFAULTS:
         kind = T.BOOL if isinstance(value, bool) else T.STRING if isinstance(value, str) else T.SCALAR
@@ -89,6 +89,7 @@ class Compiler:
             classes=tuple(ir.ClassDef(c.name, c.parent.name if c.parent else None, tuple(c.defaults().items()),
                                       c.span) for c in self.classes),
             source_files=tuple(self.graph.modules[p].path for p in self.graph.order),
+            sources=tuple((self.graph.modules[p].path, self.graph.modules[p].source) for p in self.graph.order),
         )
 
     def _execute(self, real: str) -> None:

@@ -122,6 +122,8 @@ def format_specifier(spec: ir.Specifier) -> str:
         return f"facing {_arg(spec.direction)}"
     if isinstance(spec, ir.FacingToward):
         return f"facing toward {_arg(spec.target)}"
+    if isinstance(spec, ir.ReachableBy):
+        return f"reachable by {_arg(spec.robot)}"
     return type(spec).__name__  # pragma: no cover
 
 

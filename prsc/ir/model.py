@@ -171,7 +171,7 @@ class RegionExpr(Expr):
       "polyhedron": vertices (ListExpr of vectors)
       "intersection": regions (ListExpr of regions)
       "all", "empty": no args
-    orientation args are VectorExpr of compat Euler angles (LANGUAGE.md section 1).
+    orientation args are VectorExpr of compat Euler angles (docs/language.md, `with orientation`).
     """
 
     kind: str
@@ -269,6 +269,13 @@ class FacingToward(Specifier):
     target: Expr
 
 
+@dataclass(frozen=True)
+class ReachableBy(Specifier):
+    """`reachable by R`: the centre inside robot R's top-down reachable set (docs/sampling.md)."""
+
+    robot: Expr
+
+
 # ---------------------------------------------------------------- program
 
 
@@ -354,3 +361,5 @@ class Program:
     workspace: Expr | None  # a REGION expression, or None for All()
     classes: tuple[ClassDef, ...] = field(default=())
     source_files: tuple[str, ...] = field(default=())  # the spec and every imported file
+    # (path, text) of every file read, so later stages quote source text as it was compiled.
+    sources: tuple[tuple[str, str], ...] = field(default=(), repr=False, compare=False)

@@ -46,7 +46,7 @@ def order_specifiers(specs: Sequence[ir.Specifier]) -> tuple[ir.Specifier, ...]:
 
     `facing toward` makes orientation depend on position; position specifiers that erode by
     the box would read orientation, a false cycle. They read the orientation-free bound
-    instead (orientation_free=True, "orientation" dropped from reads): LANGUAGE.md section 4.
+    instead (orientation_free=True, "orientation" dropped from reads): docs/language.md section 12.
     """
     setters: dict[str, ir.Specifier] = {}
     for spec in specs:

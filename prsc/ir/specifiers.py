@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import AXES, BOX_READS, DIRECTION_PHRASES
@@ -24,6 +26,44 @@ def _region_kind(resolver: ExprResolver, expr: ir.Expr) -> str | None:
         expr = binding.value
         seen += 1
     return expr.kind if isinstance(expr, ir.RegionExpr) else None
+
+
+def _number(expr: ir.Expr) -> float | None:
+    if isinstance(expr, ir.Const) and isinstance(expr.value, (int, float)) and not isinstance(expr.value, bool):
+        return float(expr.value)
+    if isinstance(expr, ir.UnaryOp) and expr.op == "-":
+        inner = _number(expr.operand)
+        return None if inner is None else -inner
+    return None
+
+
+def same_value(a: ir.Expr, b: ir.Expr) -> bool:
+    """Whether two expressions denote the same value in every scene: equal apart from spans
+    (a variable or a distribution node is one draw per scene), or equal constant vectors."""
+    if isinstance(a, ir.VectorExpr) and isinstance(b, ir.VectorExpr):
+        parts = [(_number(x), _number(y)) for x, y in ((a.x, b.x), (a.y, b.y), (a.z, b.z))]
+        if all(x is not None and x == y for x, y in parts):
+            return True
+    if type(a) is not type(b):
+        return False
+    for f in dataclasses.fields(a):
+        if f.name == "span":
+            continue
+        left, right = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(left, ir.Expr):
+            if not (isinstance(right, ir.Expr) and same_value(left, right)):
+                return False
+        elif isinstance(left, tuple):
+            if not isinstance(right, tuple) or len(left) != len(right):
+                return False
+            for x, y in zip(left, right):
+                if isinstance(x, ir.Expr) != isinstance(y, ir.Expr):
+                    return False
+                if (isinstance(x, ir.Expr) and not same_value(x, y)) or (not isinstance(x, ir.Expr) and x != y):
+                    return False
+        elif left != right:
+            return False
+    return True
 
 
 def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifier) -> ir.Specifier:
@@ -62,6 +102,9 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
         target = expect(r(spec.target), LOCATED_TYPES, "the reference of `beyond`")
         by = expect(r(spec.by), {T.SCALAR, T.VECTOR}, "the amount after `beyond ... by`")
         origin = expect(r(spec.origin), LOCATED_TYPES, "the point after `beyond ... from`")
+        if same_value(target, origin):
+            raise PrscError("`beyond X by d from P` needs X and P to differ: here both are the same point, "
+                            "so there is no direction to go beyond in", span)
         return ir.Beyond(span, POSITION, (), target, by, origin)
     if isinstance(spec, nodes.AlignedSpec):
         axis = spec.axis.lower()
@@ -76,6 +119,11 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
     if isinstance(spec, nodes.FacingTowardSpec):
         target = expect(r(spec.target), LOCATED_TYPES, "the target of `facing toward`")
         return ir.FacingToward(span, ("orientation",), POSITION, target)
+    if isinstance(spec, nodes.ReachableSpec):
+        robot = r(spec.robot)
+        if robot.type not in (T.OBJECT, T.ANY):
+            raise PrscError(f"`reachable by` needs a robot object, not {article(robot.type)}", robot.span)
+        return ir.ReachableBy(span, POSITION, (), robot)
     raise PrscError("unknown specifier", span)  # pragma: no cover
 
 

@@ -1,5 +1,5 @@
 """Sequential scene sampling: objects in dependency order, each uniform on its feasible
-region given the objects before it (LANGUAGE.md section 5.4), never colliding.
+region given the objects before it (docs/sampling.md, "The law of a scene"), never colliding.
 
 Per object: the region of its rules (regions.py); placed objects whose boxes could reach
 it are the only collision candidates (AABB broad phase). With no candidates and no
@@ -22,41 +22,25 @@ region measure does not depend on earlier placements, as with `on`; see docs.)
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.lower import explain_empty, numeric_failure
+from prsc.constraints.diagnostics import explain_empty, numeric_failure
 from prsc.constraints.model import COLLISION, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.geometry.free_space import free_space_sampler
-from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
+from prsc.sampling.attempt import Attempt, Failure, Limits
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
 from prsc.sampling.regions import Prepared
 from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
-
-
-@dataclass(frozen=True)
-class Limits:
-    """Bounds that make every failure finite."""
-
-    scene_attempts: int = 20  # whole-scene restarts
-    backtracks: int = 30  # per scene attempt
-    object_attempts: int = 8  # redraws of one object's own random values
-    point_draws: int = 200  # rejection draws before the exact free-space decomposition
-    free_draws: int = 50  # draws from the decomposition (only rounding or requires reject these)
-    joint_attempts: int = 100_000  # whole-scene rejections with joint=True
-    # Work per scene over all restarts and backtracks: object placements tried (each may
-    # prepare a region) and positions drawn. Whatever the spec, a scene ends within these.
-    placement_budget: int = 2_000
-    draw_budget: int = 200_000
 
 
 @dataclass
@@ -68,17 +52,6 @@ class SceneResult:
     stats: RejectionStats
     # The scene's final evaluation context (draws, objects): lets `prsc explain` rebuild rows.
     context: SceneContext | None = None
-
-
-@dataclass
-class _Failure:
-    """What went wrong last, for the error message when a scene cannot be sampled."""
-
-    index: int = -1
-    kind: str = ""
-    rows: Polytope | None = None
-    blockers: list[PlacedBox] = field(default_factory=list)
-    label: int = -1
 
 
 class SequentialSampler:
@@ -110,75 +83,70 @@ class SequentialSampler:
         self._movable = [
             rt.plan.static_position is None or rt.half is None or rt.rotation is None for rt in self.runtimes
         ]
-        self._placements = 0
-        self._draws = 0
         self._free_cache: dict[tuple[int, tuple[int, ...]], UniformSampler | None] = {}
 
     # ------------------------------------------------------------ scenes
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed`; PrscError if it cannot be sampled within the limits."""
         ctx = SceneContext(scene_rng(seed, index))
-        stats = RejectionStats(scenes=1)
-        failure = _Failure()
+        run = Attempt(ctx, RejectionStats(scenes=1), self.limits)
         attempts = self.limits.joint_attempts if self.joint else self.limits.scene_attempts
-        self._placements = 0
-        self._draws = 0
         tried = 0  # the work budget may end the attempts early: the message says how many ran
         for _ in range(attempts):
-            if self._over_budget():
+            if run.over_budget():
                 break
             tried += 1
             ctx.rollback(-1)
             ctx.objects.clear()
             ctx.level = -1
             ctx.active_requires = draw_soft_requires(self.cprog, ctx)
-            if not self._scene_checks_hold(ctx, stats, failure):
+            if not self._scene_checks_hold(run):
                 continue
-            placed: list[PlacedBox] = []
+            run.placed = []
             try:
-                complete = self._place_all(ctx, placed, stats, failure)
+                complete = self._place_all(run)
             except GeometryError as error:  # empty and unbounded regions are handled in _place
                 plan = self.runtimes[ctx.level].plan
                 raise numeric_failure(plan.name, plan.span, error) from error
             if not complete:
                 continue
-            if self.joint and not self._joint_ok(ctx, placed, stats, failure):
+            if self.joint and not self._joint_ok(run):
                 continue
             ctx.level = len(self.runtimes)
             params = evaluate_params(self.cprog, ctx)
             objects = [ctx.objects[rt.plan.name] for rt in self.runtimes]
-            return SceneResult(objects, params, stats, ctx)
-        raise self._error(seed, index, stats, failure, tried)
+            return SceneResult(objects, params, run.stats, ctx)
+        raise self._error(seed, index, run.stats, run.failure, tried)
 
-    def _scene_checks_hold(self, ctx: SceneContext, stats: RejectionStats, failure: _Failure) -> bool:
+    def _scene_checks_hold(self, run: Attempt) -> bool:
         for check in self.cprog.scene_checks:
-            if (check.soft is None or check.soft in ctx.active_requires) and not check.test(ctx):
-                stats.add(REQUIRE)
-                failure.kind, failure.label, failure.index = "require", check.label_id, -1
+            if (check.soft is None or check.soft in run.ctx.active_requires) and not check.test(run.ctx):
+                run.stats.add(REQUIRE)
+                run.fail("require", -1, label=check.label_id)
                 return False
         return True
 
-    def _place_all(self, ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure) -> bool:
+    def _place_all(self, run: Attempt) -> bool:
         n = len(self.runtimes)
         k = 0
         backtracks = 0
         while k < n:
-            if self._over_budget():
+            if run.over_budget():
                 return False
-            blame: set[int] = set()
-            if self._place(k, ctx, placed, stats, failure, blame):
+            run.blame = set()
+            if self._place(k, run):
                 k += 1
                 continue
             backtracks += 1
             if backtracks > self.limits.backtracks:
                 return False
-            j = self._backtrack_target(k, blame)
+            j = self._backtrack_target(k, run.blame)
             if j < 0:
                 return False
             for i in range(j, k + 1):
-                ctx.objects.pop(self.runtimes[i].plan.name, None)
-            placed[:] = [q for q in placed if q.index < j]
-            ctx.rollback(j)
+                run.ctx.objects.pop(self.runtimes[i].plan.name, None)
+            run.placed[:] = [q for q in run.placed if q.index < j]
+            run.ctx.rollback(j)
             k = j
         return True
 
@@ -201,25 +169,24 @@ class SequentialSampler:
         return {self._index[n] for n in names if n in self._index}
 
     # ------------------------------------------------------------ one object
-    def _place(
-        self, k: int, ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure, blame: set[int]
-    ) -> bool:
+    def _place(self, k: int, run: Attempt) -> bool:
         rt = self.runtimes[k]
+        ctx = run.ctx
         ctx.level = k
         for _ in range(self.limits.object_attempts):
-            if self._over_budget():
+            if run.over_budget():
                 return False
-            self._placements += 1
+            run.placements += 1
             ctx.rollback(k)
             journal_before = len(ctx.journal)
             obj, half, support = rt.new_value(ctx)
             try:
                 region, shift = rt.provider.region(ctx, support, rt.support is not None)
             except EmptyRegionError as error:
-                stats.add(DEAD_END)
-                failure.index, failure.kind = k, "empty"
+                run.stats.add(DEAD_END)
+                run.fail("empty", k)
                 rows = getattr(error, "rows", None)
-                failure.rows = rows if rows is not None else rt.provider.rows(ctx, support)
+                run.failure.rows = rows if rows is not None else rt.provider.rows(ctx, support)
                 if len(ctx.journal) == journal_before:
                     return False  # nothing of its own is random: only earlier objects can help
                 continue
@@ -227,61 +194,61 @@ class SequentialSampler:
                 raise PrscError(
                     f"the region of {rt.plan.name} is unbounded: add a workspace or a bounding specifier", rt.plan.span
                 ) from error
-            if self._draw(rt, obj, half, region, shift, ctx, placed, stats, failure, blame):
+            if self._draw(rt, obj, half, region, shift, run):
                 rt.finish(obj, ctx)
-                placed.append(rt.placed_box(obj, half, ctx))
+                run.placed.append(rt.placed_box(obj, half, ctx))
                 return True
-            if len(ctx.journal) == journal_before and failure.kind == "blocked":
+            if len(ctx.journal) == journal_before and run.failure.kind == "blocked":
                 return False  # proven: no free position, and nothing of its own to redraw
         return False
 
+    def _blocked(self, rt: ObjectRuntime, candidates: list[PlacedBox], run: Attempt) -> bool:
+        """Record that no free position exists among `candidates`; always False."""
+        run.stats.add(DEAD_END)
+        run.fail("blocked", rt.plan.index, list(candidates))
+        run.blame.update(q.index for q in candidates)
+        return False
+
     def _draw(
-        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared, shift: np.ndarray | None,
-        ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure, blame: set[int],
+        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared, shift: np.ndarray | None, run: Attempt,
     ) -> bool:
         """Draw the object's position (and late rotation); True when accepted."""
+        ctx = run.ctx
         rng = ctx.rng
         method, walk = self.method, self.walk_length
-        after = rt.after_position
         reach = rt.reach
         if reach is None:
             mode = "exact" if obj.rotation is not None else rt.plan.orientation.bound_mode  # type: ignore[union-attr]
             reach = aabb_reach(obj.rotation, half, mode)
         allow = not self.joint and rt.allows_collisions(obj, ctx)
         candidates: list[PlacedBox] = []
-        if placed and not self.joint and not allow:
+        if run.placed and not self.joint and not allow:
             lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
-            candidates = near(placed, lo, hi, reach)
+            candidates = near(run.placed, lo, hi, reach)
         checks = () if self.joint else tuple(c for c in rt.plan.checks if c.soft is None or c.soft in ctx.active_requires)
         if not candidates and not checks:
             p = region.draw(rng, method, walk)
             obj.position = p if shift is None else p + shift
-            if after:
-                obj.rotation = np.asarray(rt.plan.orientation.compute(ctx, obj), dtype=float)  # type: ignore[union-attr]
+            rt.late_rotation(obj, ctx)
             return True
-        if candidates and shift is None and not after and method == "exact" and self._all_static(rt, region, candidates):
+        if candidates and shift is None and not rt.after_position and method == "exact" and self._all_static(rt, region, candidates):
             # Region and obstacles are the same every scene: decompose the free space once.
             free = self._static_free_space(rt, region, candidates, obj.rotation, half)  # type: ignore[arg-type]
             if free is None:
-                stats.add(DEAD_END)
-                failure.index, failure.kind, failure.blockers = rt.plan.index, "blocked", list(candidates)
-                blame.update(q.index for q in candidates)
-                return False
+                return self._blocked(rt, candidates, run)
             # The pieces are exactly the collision-free positions (the obstacles' interiors
             # are where the OBB test says "collides"): only requires can reject a draw.
             for _ in range(self.limits.free_draws):
-                if self._accept(rt, obj, half, free.sample_one(rng), ctx, [], checks, stats, failure, blame):
+                if self._accept(rt, obj, half, free.sample_one(rng), [], checks, run):
                     return True
             return False
-        collided = False
         for _ in range(self.limits.point_draws):
-            self._draws += 1
-            if self._draws > self.limits.draw_budget:
+            run.draws += 1
+            if run.draws > self.limits.draw_budget:
                 return False
             p = region.draw(rng, method, walk)
-            if self._accept(rt, obj, half, p if shift is None else p + shift, ctx, candidates, checks, stats, failure, blame):
+            if self._accept(rt, obj, half, p if shift is None else p + shift, candidates, checks, run):
                 return True
-            collided = collided or failure.kind == "blocked"
         if not candidates or method != "exact":
             return False
         # Low acceptance against the placed boxes: decompose the free space exactly. With a
@@ -290,7 +257,7 @@ class SequentialSampler:
         # space, from which rejection is still exactly uniform, and empty only if there
         # is no free position at all.
         poly = region.poly if shift is None else region.poly.translate(shift)
-        if after:
+        if rt.after_position:
             mode = rt.plan.orientation.bound_mode  # type: ignore[union-attr]
             rotation, obstacle_half = np.eye(3), inscribed_half(half, mode)
         else:
@@ -298,13 +265,10 @@ class SequentialSampler:
         try:
             free = free_space_sampler(poly, obstacles_for(candidates, rotation, obstacle_half))  # type: ignore[arg-type]
         except EmptyRegionError:
-            stats.add(DEAD_END)
-            failure.index, failure.kind, failure.blockers = rt.plan.index, "blocked", list(candidates)
-            blame.update(q.index for q in candidates)
-            return False
+            return self._blocked(rt, candidates, run)
         for _ in range(self.limits.free_draws):
-            self._draws += 1
-            if self._accept(rt, obj, half, free.sample_one(rng), ctx, candidates, checks, stats, failure, blame):
+            run.draws += 1
+            if self._accept(rt, obj, half, free.sample_one(rng), candidates, checks, run):
                 return True
         return False
 
@@ -328,54 +292,50 @@ class SequentialSampler:
         return self._free_cache[key]
 
     def _accept(
-        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, position: np.ndarray, ctx: SceneContext,
-        candidates: list[PlacedBox], checks: tuple[RequireCheck, ...], stats: RejectionStats, failure: _Failure,
-        blame: set[int],
+        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, position: np.ndarray,
+        candidates: list[PlacedBox], checks: tuple[RequireCheck, ...], run: Attempt,
     ) -> bool:
         obj.position = position
-        if rt.after_position:
-            obj.rotation = np.asarray(rt.plan.orientation.compute(ctx, obj), dtype=float)  # type: ignore[union-attr]
+        rt.late_rotation(obj, run.ctx)
         assert obj.rotation is not None
         if candidates:
             reach = aabb_reach(obj.rotation, half) if rt.after_position or rt.reach is None else rt.reach
             hit = first_hit(candidates, position, obj.rotation, half, reach)
             if hit is not None:
-                stats.add(COLLISION)
-                blame.add(hit.index)
-                failure.index, failure.kind, failure.blockers = rt.plan.index, "blocked", [hit]
+                run.stats.add(COLLISION)
+                run.blame.add(hit.index)
+                run.fail("blocked", rt.plan.index, [hit])
                 return False
         for check in checks:
-            if not check.test(ctx):
-                stats.add(REQUIRE)
-                failure.index, failure.kind, failure.label = rt.plan.index, "require", check.label_id
+            if not check.test(run.ctx):
+                run.stats.add(REQUIRE)
+                run.fail("require", rt.plan.index, label=check.label_id)
                 return False
         return True
 
-    def _over_budget(self) -> bool:
-        return self._placements >= self.limits.placement_budget or self._draws >= self.limits.draw_budget
-
     # ------------------------------------------------------------ joint law
-    def _joint_ok(self, ctx: SceneContext, placed: list[PlacedBox], stats: RejectionStats, failure: _Failure) -> bool:
+    def _joint_ok(self, run: Attempt) -> bool:
         """Whole-scene test: no pair collides and every rejection-checked require holds."""
+        placed = run.placed
         for i, q in enumerate(placed):
             if q.allow:
                 continue
             others = near(placed[:i], np.array(q.center), np.array(q.center), q.reach)
             hit = first_hit(others, q.box.center, q.box.rotation, q.box.half_extents, q.reach)
             if hit is not None:
-                stats.add(COLLISION)
-                failure.index, failure.kind, failure.blockers = q.index, "blocked", [hit]
+                run.stats.add(COLLISION)
+                run.fail("blocked", q.index, [hit])
                 return False
         for checks in self._checks:
             for check in checks:
-                if (check.soft is None or check.soft in ctx.active_requires) and not check.test(ctx):
-                    stats.add(REQUIRE)
-                    failure.kind, failure.label = "require", check.label_id
+                if (check.soft is None or check.soft in run.ctx.active_requires) and not check.test(run.ctx):
+                    run.stats.add(REQUIRE)
+                    run.failure.kind, run.failure.label = "require", check.label_id
                     return False
         return True
 
     # ------------------------------------------------------------ errors
-    def _error(self, seed: int, index: int, stats: RejectionStats, failure: _Failure, attempts: int) -> PrscError:
+    def _error(self, seed: int, index: int, stats: RejectionStats, failure: Failure, attempts: int) -> PrscError:
         labels = self.cprog.labels
         head = f"could not sample scene {index} (seed {seed}) in {attempts} attempts; rejections: {stats.summary()}"
         span: Span | None = None

@@ -5,8 +5,9 @@ Three cases, decided by the constraint stage:
 - anchored: the non-static rows move rigidly with one earlier object (e.g. `on tr_1`):
   prepared once with that object at the origin, translated by its position per scene
   (when the static rows, e.g. the workspace, do not cut the translated region);
-- general: rows built per scene; a point (`at`) is solved directly, anything else is
-  prepared (vertex enumeration + triangulation), with a small cache on the exact rows.
+- general: rows built per scene; a point (`at`: the region's `point_rule`) is checked
+  directly, anything else is prepared (vertex enumeration + triangulation), with a
+  small cache on the exact rows.
 The sample is a function of the scene's rows and random stream only, never of which
 scenes filled a cache first.
 """
@@ -17,8 +18,10 @@ from collections import OrderedDict
 
 import numpy as np
 
+from prsc.constraints.build import rule_rows
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import RegionRules, Support
+from prsc.constraints.model import RegionRules, Rule
+from prsc.constraints.support import Support
 from prsc.geometry.affine import AffineRegion, reduce_affine
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.hit_and_run import hit_and_run
@@ -98,18 +101,6 @@ def _empty(poly: Polytope) -> EmptyRegionError:
     return error
 
 
-_IDENTITY = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
-
-
-def _fixed_point(polys: list[Polytope]) -> tuple[np.ndarray, int] | None:
-    """(point, index of its block) for an `at`-like block (equality rows = the identity)."""
-    for i, poly in enumerate(polys):
-        c = poly.C
-        if c.shape == (3, 3) and c.tolist() == _IDENTITY:
-            return poly.d, i
-    return None
-
-
 def _row_norms(poly: Polytope) -> tuple[np.ndarray, np.ndarray]:
     """max(|row|, 1) of the inequality and equality rows (the tolerance scale)."""
     return (
@@ -139,6 +130,8 @@ class RegionProvider:
         self.plan = plan
         self.static_rows = plan.static_rows
         self.dynamic = plan.dynamic
+        # The rule fixing p to a point (`at V`), when there is one: its rows are p = point.
+        self.point_rule: Rule | None = None if plan.point_rule is None else plan.rules[plan.point_rule]
         self._static: Prepared | None = None
         self._anchored: Prepared | None = None
         self._anchored_state = "new"  # new | ok | none
@@ -169,7 +162,7 @@ class RegionProvider:
     def rows(self, ctx: SceneContext, support: Support) -> Polytope:
         """All rows of this scene (static and dynamic), e.g. to explain an empty region."""
         polys = [] if self.static_rows is None else [self.static_rows]
-        polys += [r.build(ctx, support) for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
+        polys += [rule_rows(r, ctx, support) for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
         if not polys:
             return Polytope.everything()
         return intersect(*polys)
@@ -191,11 +184,12 @@ class RegionProvider:
                 polys.append(self.static_rows)
             return self._general(intersect(*polys)), None
         if support_static:
-            dynamic = [r.build(ctx, support) for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
-            fixed = _fixed_point(dynamic)
-            if fixed is not None:
+            active = [r for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
+            dynamic = [rule_rows(r, ctx, support) for r in active]
+            if self.point_rule is not None:
                 # `at V` with a random V: no preparation, just check the point.
-                point, which = fixed
+                which = next(i for i, r in enumerate(active) if r is self.point_rule)
+                point = dynamic[which].d
                 ok = all(_satisfies(poly, point, skip_eq=(i == which)) for i, poly in enumerate(dynamic))
                 if ok and self.static_rows is not None:
                     ok = _satisfies(self.static_rows, point, self._static_norms())
@@ -205,7 +199,7 @@ class RegionProvider:
             polys = dynamic if self.static_rows is None else [self.static_rows, *dynamic]
             return self._general(intersect(*polys) if polys else Polytope.everything()), None
         # The object's own size or rotation is random: every rule is rebuilt.
-        polys = [r.build(ctx, support) for r in self.plan.rules if r.soft is None or r.soft in ctx.active_requires]
+        polys = [rule_rows(r, ctx, support) for r in self.plan.rules if r.soft is None or r.soft in ctx.active_requires]
         return self._general(intersect(*polys) if polys else Polytope.everything()), None
 
     def _anchored_region(self, shift: np.ndarray) -> Prepared | None:
@@ -290,7 +284,7 @@ def violated_rule(provider: RegionProvider, ctx: SceneContext, support: Support,
     for rule in provider.dynamic:
         if rule.soft is not None and rule.soft not in ctx.active_requires:
             continue
-        label = first_violation(rule.build(ctx, support), p)
+        label = first_violation(rule_rows(rule, ctx, support), p)
         if label is not None:
             return label
     return None

@@ -11,13 +11,14 @@ rejects the whole scene, counted by cause as in the paper's Table II.
 from __future__ import annotations
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.lower import numeric_failure
+from prsc.constraints.diagnostics import numeric_failure
 from prsc.constraints.model import COLLISION, CONTAINMENT, REQUIRE, ConstraintProgram, RequireCheck, RowLabel
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
+from prsc.sampling.baseline import baseline_region
 from prsc.sampling.collisions import PlacedBox, first_hit, near
 from prsc.sampling.engine import SceneResult
-from prsc.sampling.regions import violated_rule
+from prsc.sampling.regions import RegionProvider, violated_rule
 from prsc.sampling.runtime import build_runtimes, draw_soft_requires, evaluate_params
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
@@ -32,6 +33,7 @@ class RejectionSampler:
         self.cprog = cprog
         self.max_attempts = int(max_attempts)
         self.runtimes = build_runtimes(cprog)
+        self.base_providers = [RegionProvider(baseline_region(cprog, plan)) for plan in cprog.objects]
         # Requires to test after each object (all of them: nothing is lowered here).
         after: list[list[RequireCheck]] = [[] for _ in self.runtimes]
         self._scene_tests: list[RequireCheck] = []
@@ -80,9 +82,8 @@ class RejectionSampler:
         rt = self.runtimes[k]
         ctx.level = k
         obj, half, support = rt.new_value(ctx)
-        assert rt.base_provider is not None
         try:
-            region, shift = rt.base_provider.region(ctx, support, rt.support is not None)
+            region, shift = self.base_providers[k].region(ctx, support, rt.support is not None)
         except EmptyRegionError:
             return CONTAINMENT  # its equalities put it outside the workspace's bounding box
         except UnboundedRegionError as error:
@@ -91,8 +92,7 @@ class RejectionSampler:
             ) from error
         p = region.draw(ctx.rng, "exact", 0)
         obj.position = p if shift is None else p + shift
-        if rt.after_position:
-            obj.rotation = rt.plan.orientation.compute(ctx, obj)  # type: ignore[union-attr]
+        rt.late_rotation(obj, ctx)
         label = violated_rule(rt.provider, ctx, support, obj.position)
         if label is not None:
             return labels[label].cause

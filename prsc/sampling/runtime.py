@@ -8,7 +8,9 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import ConstraintProgram, ObjectPlan, Support
+from prsc.constraints.model import ConstraintProgram, ObjectPlan
+from prsc.constraints.orientation import orientation_of
+from prsc.constraints.support import Support
 from prsc.constraints.values import DIMENSIONS, ObjectValue, dimension, static_dims
 from prsc.sampling.collisions import PlacedBox, aabb_reach
 from prsc.sampling.regions import RegionProvider
@@ -20,7 +22,6 @@ class ObjectRuntime:
 
     plan: ObjectPlan
     provider: RegionProvider
-    base_provider: RegionProvider | None
     dims: tuple[float, float, float] | None
     half: np.ndarray | None
     rotation: np.ndarray | None  # static rotation (identity when there is no orientation rule)
@@ -39,14 +40,12 @@ class ObjectRuntime:
         orient = plan.orientation
         after = orient is not None and orient.after_position
         rotation = np.eye(3) if orient is None else orient.static_value
-        support = None
+        support = plan.static_support
         reach = None
         if half is not None:
             if rotation is not None:
-                support = Support(rotation, half, "exact")
                 reach = aabb_reach(rotation, half)
             elif after:
-                support = Support(None, half, orient.bound_mode)  # type: ignore[union-attr]
                 reach = aabb_reach(None, half, orient.bound_mode)  # type: ignore[union-attr]
         if "allowCollisions" in props:
             allow: bool | None = bool(props["allowCollisions"])
@@ -55,7 +54,6 @@ class ObjectRuntime:
         return cls(
             plan,
             RegionProvider(plan.region),
-            None if plan.base_region is None else RegionProvider(plan.base_region),
             dims,
             half,
             rotation,
@@ -78,7 +76,7 @@ class ObjectRuntime:
         if self.rotation is not None:
             obj.rotation = self.rotation
         elif not self.after_position:
-            obj.rotation = np.asarray(plan.orientation.compute(ctx, obj), dtype=float)  # type: ignore[union-attr]
+            obj.rotation = np.asarray(orientation_of(plan.orientation, ctx, obj), dtype=float)  # type: ignore[arg-type]
         support = self.support
         if support is None:
             if obj.rotation is not None:
@@ -92,6 +90,11 @@ class ObjectRuntime:
         if self.allow_static is not None:
             return self.allow_static
         return bool(obj.get("allowCollisions", ctx))
+
+    def late_rotation(self, obj: ObjectValue, ctx: SceneContext) -> None:
+        """Set the rotation of an object whose rotation depends on its position (`facing toward`)."""
+        if self.after_position:
+            obj.rotation = np.asarray(orientation_of(self.plan.orientation, ctx, obj), dtype=float)  # type: ignore[arg-type]
 
     def finish(self, obj: ObjectValue, ctx: SceneContext) -> None:
         """Evaluate every property (draws happen at this object's level) and the late rotation."""

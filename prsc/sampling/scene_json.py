@@ -20,7 +20,7 @@ from prsc.limits import mass_problem, size_problem
 
 FORMAT = "prsc-scene"
 VERSION = 1
-DENSITY = 500.0  # kg/m^3 (LANGUAGE.md section 6)
+DENSITY = 500.0  # kg/m^3 (docs/language.md section 11)
 ROBOT_MODELS = frozenset({"panda"})
 # Models fixed in the world unless the spec says `static False`: robot arms are mounted,
 # cameras stay where they were sampled, tables are furniture.

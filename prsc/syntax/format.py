@@ -29,7 +29,7 @@ def _header(node: Node) -> str:
     parts = [f"{type(node).__name__} {_leaf(node.span)}"]
     for f in fields(node):
         value = getattr(node, f.name)
-        if f.name != "span" and not isinstance(value, Span) and _is_leaf(value):
+        if f.name != "span" and f.repr and not isinstance(value, Span) and _is_leaf(value):
             parts.append(f"{f.name}={_leaf(value)}")
     return " ".join(parts)
 

@@ -6,7 +6,7 @@ The parser knows no semantics: names are unresolved, `deg` is still a postfix op
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from prsc.errors import Span
 
@@ -231,6 +231,13 @@ class FacingTowardSpec(Specifier):
     target: Expr
 
 
+@dataclass(frozen=True)
+class ReachableSpec(Specifier):
+    """`reachable by robot`."""
+
+    robot: Expr
+
+
 # ---------------------------------------------------------------- statements
 
 
@@ -322,3 +329,4 @@ class Module(Node):
 
     path: str
     statements: tuple[Statement, ...]
+    source: str = field(default="", repr=False, compare=False)  # the file's text, for quoting spans

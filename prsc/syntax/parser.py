@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import functools
 from pathlib import Path
 
@@ -29,7 +31,7 @@ _WORDS = {
 _EXPRESSION_START = {"NAME", "NUMBER", "STRING", "LPAR", "LSQB", "LBRACE", "MINUS", "PLUS", "NOT",
                      "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT"}
 _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AHEAD", "BEHIND", "ABOVE",
-                    "BELOW", "BEYOND", "ALIGNED", "FACING"}
+                    "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "DEG", "_RELATIVE", "_AND",
               "_OR"}
 # A spec is a page of text. This bounds parse time and memory: lark's LALR parser is
@@ -175,7 +177,7 @@ def parse_source(text: str, path: str) -> nodes.Module:
     tree = None
     try:
         tree = _parser().parse(text)
-        return ToAst(path).transform(tree)
+        return dataclasses.replace(ToAst(path).transform(tree), source=text)
     except UnexpectedInput as error:
         raise _syntax_error(path, error) from None
     except LayoutError as error:

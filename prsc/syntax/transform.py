@@ -154,6 +154,9 @@ class ToAst(Transformer):
     def facing_toward_spec(self, meta, children):
         return n.FacingTowardSpec(self._span(meta), children[-1])
 
+    def reachable_spec(self, meta, children):
+        return n.ReachableSpec(self._span(meta), children[-1])
+
     # ------------------------------------------------------------ expressions
 
     def _chain(self, meta, children, make):

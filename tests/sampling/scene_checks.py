@@ -1,5 +1,7 @@
-"""An independent checker of sampled scenes: re-derives every relation of LANGUAGE.md
-sections 4-5 from the scene JSON alone plus the spec's relations as the IR states them.
+"""An independent checker of sampled scenes: re-derives every relation of docs/language.md
+(specifiers, requires, the workspace, collisions) from the scene JSON alone plus the
+spec's relations as the IR states them. It counts what it checked and lists what it
+could not evaluate; check_scenes fails on a relation never checked in any scene.
 
 It shares no code with the sampler: no prsc.constraints, no prsc.geometry. Expressions
 of the spec are evaluated in interval arithmetic (a random draw is the interval of its
@@ -11,8 +13,10 @@ own separating-axis test over all 15 axes.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -25,6 +29,30 @@ CONTACT = 1e-6  # boxes overlapping by less than this along some axis are in con
 
 class Unknown(Exception):
     """The value cannot be derived from the scene JSON (then the relation is not checked)."""
+
+
+class SceneCheck(list):
+    """The violated relations of one scene (the list), plus what was checked and what could not be.
+
+    `checked`: how many relations were evaluated; `unchecked`: the relations the checker
+    could not evaluate in this scene, each with the reason.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.checked = 0
+        self.unchecked: list[str] = []
+
+    def tried(self, relation: str, check: Any) -> None:
+        """Run one relation's check: `check()` returns a problem, or None when it holds."""
+        try:
+            bad = check()
+        except Unknown as why:
+            self.unchecked.append(f"{relation} ({why})")
+            return
+        self.checked += 1
+        if bad:
+            self.append(f"{relation}: {bad}")
 
 
 # ---------------------------------------------------------------- intervals
@@ -89,7 +117,7 @@ def quat_matrix(q: list[float]) -> np.ndarray:
 
 
 def euler_compat(a: float, b: float, c: float) -> np.ndarray:
-    """LANGUAGE.md section 1: Vector3D(a, b, c) = Rx(c) Ry(b) Rz(a)."""
+    """docs/language.md section 1: Vector3D(a, b, c) = Rx(c) Ry(b) Rz(a)."""
     ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
     rz = np.array([[ca, -sa, 0], [sa, ca, 0], [0, 0, 1.0]])
     ry = np.array([[cb, 0, sb], [0, 1.0, 0], [-sb, 0, cb]])
@@ -340,14 +368,18 @@ def _spec_text(spec: ir.Specifier) -> str:
     return f"{type(spec).__name__} at line {spec.span.line}"
 
 
-def check_scene(program: ir.Program, scene: dict) -> list[str]:
-    """Every violated relation of one scene, as readable strings (empty when the scene is valid)."""
+def check_scene(program: ir.Program, scene: dict) -> SceneCheck:
+    """Every violated relation of one scene, as readable strings (empty when the scene is valid).
+
+    A relation the checker cannot evaluate is not a violation, but it is listed in
+    `unchecked`: check_scenes fails when a relation was never checked in any scene.
+    """
     bodies = {
         o["name"]: Body(o["name"], np.array(o["position"], dtype=float), quat_matrix(o["quaternion"]),
                         np.array(o["dimensions"], dtype=float), o)
         for o in scene["objects"]
     }
-    problems: list[str] = []
+    problems = SceneCheck()
     names = [o.name for o in program.objects]
     if sorted(names) != sorted(bodies):
         problems.append(f"objects differ: spec {sorted(names)} vs scene {sorted(bodies)}")
@@ -358,39 +390,20 @@ def check_scene(program: ir.Program, scene: dict) -> list[str]:
         for prop, idx in (("width", 0), ("length", 1), ("height", 2)):
             expr = decl.prop(prop)
             if expr is not None:
-                try:
-                    v = ev.num(ev.ev(expr))
-                    if not (v.lo - TOL <= body.dims[idx] <= v.hi + TOL):
-                        problems.append(f"{decl.name}: {prop} {body.dims[idx]} not in [{v.lo}, {v.hi}]")
-                except Unknown:
-                    pass
+                problems.tried(f"{decl.name}: {prop}", lambda: _dimension(ev, body, expr, prop, idx))
         for spec in decl.specifiers:
-            try:
-                bad = _check_specifier(ev, body, spec)
-            except Unknown:
-                continue
-            if bad:
-                problems.append(f"{decl.name}: {_spec_text(spec)}: {bad}")
+            if isinstance(spec, ir.With) and spec.prop not in ("position", "orientation"):
+                continue  # a property value, not a relation (sizes are checked above)
+            problems.tried(f"{decl.name}: {_spec_text(spec)}", lambda: _check_specifier(ev, body, spec))
     # Requires (hard ones).
     for req in program.requires:
         if req.probability < 1.0:
             continue
-        try:
-            holds = ev.ev(req.condition)
-        except Unknown:
-            continue
-        if holds is False:
-            problems.append(f"require at line {req.span.line} is violated")
+        problems.tried(f"require at line {req.span.line}", lambda: "violated" if ev.ev(req.condition) is False else None)
     # Workspace containment.
     if program.workspace is not None:
-        try:
-            ws = ev.ev(program.workspace)
-            for body in bodies.values():
-                out = _box_inside(ws, body, True)
-                if out > TOL:
-                    problems.append(f"{body.name} sticks out of the workspace by {out:.3g} m")
-        except Unknown:
-            pass
+        for body in bodies.values():
+            problems.tried(f"{body.name}: workspace", lambda: _workspace(ev, program.workspace, body))
     # Collisions.
     allowed = {n for n, b in bodies.items() if b.data.get("properties", {}).get("allowCollisions")}
     items = list(bodies.values())
@@ -401,11 +414,41 @@ def check_scene(program: ir.Program, scene: dict) -> list[str]:
             ra = np.abs(a.r) @ a.half
             rb = np.abs(b.r) @ b.half
             if np.any(np.abs(a.p - b.p) >= ra + rb):
+                problems.checked += 1  # apart along a world axis: checked, no collision
                 continue
+            problems.checked += 1
             pen = sat_penetration(a, b)
             if pen > CONTACT:
                 problems.append(f"{a.name} and {b.name} intersect (overlap {pen:.3g} m)")
     return problems
+
+
+def check_scenes(program: ir.Program, scenes: Any) -> SceneCheck:
+    """check_scene over several scenes (problems prefixed by the scene's index); a relation
+    not checked in any of them is a problem too (so a spec the checker cannot read fails)."""
+    total = SceneCheck()
+    never: list[str] | None = None
+    for index, scene in enumerate(scenes):
+        one = check_scene(program, scene)
+        total.extend(f"scene {index}: {p}" for p in one)
+        total.checked += one.checked
+        names = [u.split(" (")[0] for u in one.unchecked]
+        never = names if never is None else [n for n in never if n in names]
+        total.unchecked.extend(one.unchecked)
+    total.extend(f"never checked: {n}" for n in (never or []))
+    return total
+
+
+def _dimension(ev: Evaluator, body: Body, expr: ir.Expr, prop: str, idx: int) -> str | None:
+    v = ev.num(ev.ev(expr))
+    if not (v.lo - TOL <= body.dims[idx] <= v.hi + TOL):
+        return f"{body.dims[idx]} not in [{v.lo}, {v.hi}]"
+    return None
+
+
+def _workspace(ev: Evaluator, workspace: ir.Expr, body: Body) -> str | None:
+    out = _box_inside(ev.ev(workspace), body, True)
+    return f"sticks out of the workspace by {out:.3g} m" if out > TOL else None
 
 
 def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | None:
@@ -495,9 +538,17 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         return None
     if isinstance(spec, ir.Facing):
         v = ev.num(ev.ev(spec.direction))
-        if np.any(v.lo != v.hi):
-            raise Unknown("random facing")
         forward = body.r[:, 1]
+        if not v.is_vector and np.any(v.lo != v.hi):
+            # A random yaw: yaw only, and the angle within the interval of the draw.
+            yaw = math.atan2(-forward[0], forward[1])
+            lo, hi = float(v.lo), float(v.hi)
+            offset = (yaw - lo) % (2 * math.pi)
+            if abs(body.r[2, 2] - 1.0) > 1e-9 or (offset > hi - lo + 1e-9 and offset < 2 * math.pi - 1e-9):
+                return f"yaw {yaw:.6g} not in [{lo:.6g}, {hi:.6g}]"
+            return None
+        if np.any(v.lo != v.hi):
+            raise Unknown("random facing direction")
         if v.is_vector:
             want = v.lo / np.linalg.norm(v.lo)
             if np.max(np.abs(forward - want)) > 1e-9:
@@ -528,4 +579,26 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         if abs(body.r[2, 2] - 1.0) > 1e-9 or np.max(np.abs(forward - d / np.linalg.norm(d))) > 1e-9:
             return "does not face toward its target"
         return None
-    return None
+    if isinstance(spec, ir.ReachableBy):
+        robot = ev.ev(spec.robot)
+        if not isinstance(robot, Body):
+            raise Unknown("reachable by a non-object")
+        return _outside_reach(robot, p)
+    raise Unknown(f"the checker has no test for {type(spec).__name__}")
+
+
+REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints"
+
+
+def _outside_reach(robot: Body, p: np.ndarray) -> str | None:
+    """Whether p is in the robot model's reachable cells, read from the shipped data file itself."""
+    model = robot.data.get("properties", {}).get("model") or robot.data.get("model")
+    path = REACH_DATA / f"{model}_reach.json"
+    if not path.is_file():
+        raise Unknown(f"no reach data for model {model!r}")
+    data = json.loads(path.read_text(encoding="utf-8"))
+    cells = [data["cell"]]
+    base = robot.p - robot.r[:, 2] * robot.dims[2] / 2
+    local = robot.r.T @ (p - base)
+    worst = min(float(np.max(np.array(c["A"]) @ local - np.array(c["b"]))) for c in cells)
+    return None if worst <= TOL else f"outside {robot.name}'s reach by {worst:.3g} m"

@@ -12,7 +12,7 @@ from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
 from prsc.sampling.stats import RejectionStats
-from tests.sampling.scene_checks import check_scene
+from tests.sampling.scene_checks import check_scene, check_scenes
 from tests.original import ORIGINAL, needs_original
 
 REPO = Path(__file__).resolve().parents[2]
@@ -50,9 +50,9 @@ def test_no_free_position_is_proven_and_the_blocker_re_placed(tmp_path):
         "a = Box completely on t\n"
         "b = Box completely on t\n",
     )
-    for i in range(100):
-        scene = sampler.scene(4, i)
-        assert check_scene(program, scene) == []
+    scenes = [sampler.scene(4, i) for i in range(100)]
+    assert not check_scenes(program, scenes)
+    for scene in scenes:
         xa, xb = (o["position"][0] for o in scene["objects"][1:])
         assert abs(xa - xb) >= 0.3 - 1e-9
 
@@ -91,9 +91,9 @@ def test_allow_collisions_and_facing_toward(tmp_path):
         "ghost = Box at Vector3D(0, 0, 0.6), with allowCollisions True\n"
         "c = Bin completely on t, facing toward ghost\n",
     )
-    for i in range(50):
-        scene = sampler.scene(0, i)
-        assert check_scene(program, scene) == []
+    scenes = [sampler.scene(0, i) for i in range(50)]
+    assert not check_scenes(program, scenes)
+    for scene in scenes:
         ghost, c = scene["objects"][1], scene["objects"][2]
         assert ghost["properties"] == {"allowCollisions": True}
         w, x, y, z = c["quaternion"]
@@ -127,7 +127,7 @@ def test_baseline_counts_rejections_by_cause_and_exact_rejects_nothing():
         for i in range(20):
             base.merge(rej_sampler.sample(2, i).stats)
             exact.merge(exact_sampler.sample(2, i).stats)
-            assert check_scene(prog, rej_sampler.scene(2, i)) == []
+        assert not check_scenes(prog, [rej_sampler.scene(2, i) for i in range(20)])
         assert exact.total == 0
         assert all(base.counts.get(c, 0) > 0 for c in causes)
         assert base.total / 20 > 50  # the paper: about 200 per scene
@@ -137,8 +137,8 @@ def test_many_specifiers_spec_is_valid_under_exact_and_hit_and_run():
     program = compile_program(str(MANY), ())
     for name, n in (("exact", 150), ("hit-and-run", 10)):
         sampler = Sampler(program, name)
-        for i in range(n):
-            assert check_scene(program, sampler.scene(6, i)) == [], (name, i)
+        report = check_scenes(program, [sampler.scene(6, i) for i in range(n)])
+        assert not report, (name, report)
 
 
 @pytest.mark.parametrize("name", ["exact", "rejection"])

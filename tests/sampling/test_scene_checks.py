@@ -10,7 +10,7 @@ import pytest
 from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
-from tests.sampling.scene_checks import check_scene
+from tests.sampling.scene_checks import check_scene, check_scenes
 from tests.original import ORIGINAL, PRESENT, needs_original, original_params, original_paths
 
 REPO = Path(__file__).resolve().parents[2]
@@ -39,10 +39,9 @@ def test_every_spec_with_objects_is_covered():
 @pytest.mark.parametrize("program", PROGRAMS)
 def test_exact_scenes_satisfy_every_relation(program):
     sampler = Sampler(program, "exact")
-    for index in range(N_SCENES):
-        scene = sampler.scene(7, index)
-        problems = check_scene(program, scene)
-        assert not problems, f"scene {index}: {problems}"
+    report = check_scenes(program, (sampler.scene(7, index) for index in range(N_SCENES)))
+    assert not report, report
+    assert report.checked >= N_SCENES * len(program.objects)
 
 
 # The naive baseline draws every object from the workspace box: on these specs it finds a
@@ -58,8 +57,8 @@ def test_baseline_samplers_satisfy_every_relation(program):
         names.append("rejection")
     for name in names:
         sampler = Sampler(program, name)
-        for index in range(10):
-            assert not check_scene(program, sampler.scene(3, index)), (name, index)
+        report = check_scenes(program, (sampler.scene(3, index) for index in range(10)))
+        assert not report, (name, report)
 
 
 def test_rejection_baseline_gives_up_with_statistics_on_a_tight_spec():
@@ -90,3 +89,24 @@ def test_checker_catches_a_moved_tray_a_collision_and_a_broken_require():
     outside = copy.deepcopy(scene)
     next(o for o in outside["objects"] if o["name"] == "camera")["position"][2] = 4.95
     assert any("camera" in p for p in check_scene(program, outside))
+
+
+def test_checker_counts_relations_and_fails_on_one_it_never_checked(tmp_path):
+    spec = tmp_path / "random_beyond.prs"
+    spec.write_text(
+        "from tabletop import *\n"
+        "t = Table at Vector3D(0, 0, 0.4), with width 1, with length 1, with height 0.8\n"
+        "c = Cube beyond Vector3D(0, 0, 1) by (0.1, 0.2) from Vector3D(0, -1, 1)\n",
+        encoding="utf-8",
+    )
+    program = compile_program(str(spec), (str(REPO / "specs"),))
+    scenes = [Sampler(program, "exact").scene(0, i) for i in range(3)]
+    report = check_scenes(program, scenes)
+    # Per scene: 6 sizes, `at`, the workspace for each object and the one pair's collision
+    # test are checked; the random `beyond` cannot be.
+    assert report.checked == 3 * 10
+    assert any(p.startswith("never checked: c: Beyond") for p in report), report
+    table_cube = compile_program(str(REPO / "specs" / "table_cube.prs"), ())
+    scenes = [Sampler(table_cube, "exact").scene(0, i) for i in range(3)]
+    full = check_scenes(table_cube, scenes)
+    assert not full and not full.unchecked and full.checked > 3 * 20

@@ -1,4 +1,4 @@
-"""The parser: every construct of LANGUAGE.md parses to the expected AST, with spans."""
+"""The parser: every construct of docs/language.md parses to the expected AST, with spans."""
 
 from __future__ import annotations
 

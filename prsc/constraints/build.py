@@ -1,0 +1,59 @@
+"""Rows of a position rule in one scene: the rule's row builder, looked up by its kind."""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from prsc.constraints import specifiers as rows
+from prsc.constraints.context import SceneContext
+from prsc.constraints.model import Rule
+from prsc.constraints.reach import rows_reachable
+from prsc.constraints.support import Support
+from prsc.geometry.polytope import Polytope
+
+Builder = Callable[[Rule, list[Any], Support], Polytope]
+
+
+def _require_rows(rule: Rule, values: list[Any], support: Support) -> Polytope:
+    le_a, le_b, eq_a, eq_b = values[0]
+    label = rule.label_id
+    a = np.array(le_a, dtype=float).reshape(-1, 3)
+    c = np.array(eq_a, dtype=float).reshape(-1, 3)
+    return Polytope(a, np.array(le_b, dtype=float), c, np.array(eq_b, dtype=float), np.full(len(a), label), np.full(len(c), label))
+
+
+BUILDERS: dict[str, Builder] = {
+    "at": lambda r, v, s: rows.rows_at(v[0], r.label_id, r.span),
+    "beyond": lambda r, v, s: rows.rows_beyond(v[0], v[1], v[2], r.label_id, r.span),
+    "in": lambda r, v, s: rows.rows_in(v[0], r.option("completely"), s, r.label_id, r.span),
+    "on": lambda r, v, s: rows.rows_on(v[0], r.option("completely"), s, r.label_id, r.span),
+    "direction": lambda r, v, s: rows.rows_direction(r.option("relation"), v[0], v[1] if len(v) > 1 else None, s, r.label_id, r.span),
+    "aligned": lambda r, v, s: rows.rows_aligned(v[0], r.option("axis"), r.label_id, r.span),
+    "workspace": lambda r, v, s: rows.rows_in(v[0], True, s, r.label_id, r.span),
+    "require": _require_rows,
+    "reachable": lambda r, v, s: rows_reachable(v[0], r.label_id, r.span),
+}
+
+# Kinds whose rows never read the object's own box (its support function).
+SIZE_FREE = frozenset({"at", "beyond", "aligned", "reachable"})
+
+
+def reads_support(rule: Rule) -> bool:
+    """Whether the rule's rows depend on the object's size or rotation."""
+    if rule.kind == "in":
+        return bool(rule.option("completely"))
+    return rule.kind not in SIZE_FREE
+
+
+def rows_from_values(rule: Rule, values: list[Any], support: Support) -> Polytope:
+    """The rule's rows for concrete argument values."""
+    return BUILDERS[rule.kind](rule, values, support)
+
+
+def rule_rows(rule: Rule, ctx: SceneContext, support: Support) -> Polytope:
+    """The rule's rows in one scene."""
+    if rule.static:
+        return rule.template.rows  # type: ignore[union-attr]
+    return BUILDERS[rule.kind](rule, [f(ctx) for f in rule.values], support)

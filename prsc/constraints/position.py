@@ -1,0 +1,108 @@
+"""Position specifiers (and the workspace) lowered to rule records with their row templates."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from prsc.constraints import specifiers as rows
+from prsc.constraints.analysis import CONST, LOCATED_ARGS, common_anchor, motion
+from prsc.constraints.build import reads_support, rows_from_values
+from prsc.constraints.model import CONTAINMENT, POSITION, RELATIVE, RowTemplate, Rule
+from prsc.constraints.requires import mentioned_objects
+from prsc.constraints.state import LoweringState
+from prsc.constraints.support import Support
+from prsc.constraints.values import ObjectValue
+from prsc.errors import PrscError, Span
+from prsc.ir import model as ir
+
+
+def _cause(spec: ir.Specifier) -> str:
+    if isinstance(spec, (ir.Direction, ir.AlignedWith)):
+        return RELATIVE
+    if isinstance(spec, (ir.In, ir.On, ir.ReachableBy)):
+        return CONTAINMENT
+    return POSITION
+
+
+def _kind_args_options(spec: ir.Specifier) -> tuple[str, tuple[ir.Expr, ...], tuple[tuple[str, Any], ...]]:
+    """The rule kind, argument expressions and options of a position specifier."""
+    if isinstance(spec, ir.At):
+        return "at", (spec.point,), ()
+    if isinstance(spec, ir.With):
+        return "at", (spec.value,), ()
+    if isinstance(spec, ir.Beyond):
+        return "beyond", (spec.target, spec.by, spec.origin), ()
+    if isinstance(spec, ir.In):
+        return "in", (spec.region,), (("completely", spec.completely),)
+    if isinstance(spec, ir.On):
+        return "on", (spec.target,), (("completely", spec.completely),)
+    if isinstance(spec, ir.Direction):
+        if spec.relation not in rows.DIRECTION_AXES:
+            raise PrscError(f"unknown direction {spec.relation!r}", spec.span)
+        args = (spec.target,) if spec.by is None else (spec.target, spec.by)
+        return "direction", args, (("relation", spec.relation),)
+    if isinstance(spec, ir.AlignedWith):
+        axis = spec.axis.strip("'\"").lower()
+        if axis not in ("x", "y", "z"):
+            raise PrscError(f"'aligned with' needs the axis x, y or z, not {spec.axis!r}", spec.span)
+        return "aligned", (spec.target,), (("axis", axis),)
+    if isinstance(spec, ir.ReachableBy):
+        return "reachable", (spec.robot,), ()
+    raise PrscError(f"unsupported position specifier {type(spec).__name__}", spec.span)
+
+
+def template(low: LoweringState, rule: Rule, support: Support | None, me: ObjectValue) -> RowTemplate | None:
+    """The rule's rows as a template, when its arguments are constant or move with one object.
+
+    Which case applies is read off the argument expressions (analysis.motion); the rows
+    are then built once from the constant values, with the anchor at the origin. A
+    PrscError from building them (e.g. `beyond V by 0.3 from V`) is the spec's error.
+    """
+    if reads_support(rule) and support is None:
+        return None
+    compiler = low.compiler
+    motions = [motion(compiler, arg) for arg in rule.args]
+    needs = support if support is not None else Support(np.eye(3), np.zeros(3))
+    if all(m.kind == CONST for m in motions):
+        values = [compiler.compile(arg).value for arg in rule.args]
+        return RowTemplate(rows_from_values(rule, values, needs), None)
+    anchor = common_anchor(motions, LOCATED_ARGS.get(rule.kind, ()))
+    if anchor is None:
+        return None
+    ctx = low.fixed_context(me, anchor)
+    values = [compiler.compile(arg).value if m.kind == CONST else compiler.compile(arg).fn(ctx) for arg, m in zip(rule.args, motions)]
+    return RowTemplate(rows_from_values(rule, values, needs), anchor)
+
+
+def specifier_rule(low: LoweringState, obj: ir.ObjectDecl, spec: ir.Specifier, support: Support | None, me: ObjectValue) -> Rule | None:
+    """The rule of one specifier that sets the position, else None."""
+    if "position" not in spec.sets:
+        return None
+    kind, args, options = _kind_args_options(spec)
+    refs: set[str] = set()
+    for arg in args:
+        refs |= mentioned_objects(arg)
+    label = low.label(obj.name, low.text(spec.span, type(spec).__name__.lower()), spec.span, _cause(spec), tuple(sorted(refs)))
+    values = tuple(low.compiler.compile(arg).fn for arg in args)
+    rule = _with_template(low, Rule(kind, label, spec.span, args, options, None, None, values), support, me)
+    if kind == "on" and rule.option("completely"):
+        relaxed = _with_template(low, Rule(kind, label, spec.span, args, (("completely", False),), None, None, values), support, me)
+        rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
+    return rule
+
+
+def workspace_rule(low: LoweringState, obj: ir.ObjectDecl, workspace: ir.Expr, support: Support | None, me: ObjectValue) -> Rule:
+    """The workspace as a rule on one object: its box completely inside."""
+    span: Span | None = workspace.span
+    label = low.label(obj.name, "workspace", span, CONTAINMENT)
+    rule = Rule("workspace", label, span, (workspace,), (("completely", True),), None, None, (low.compiler.compile(workspace).fn,))
+    return _with_template(low, rule, support, me)
+
+
+def _with_template(low: LoweringState, rule: Rule, support: Support | None, me: ObjectValue) -> Rule:
+    found = template(low, rule, support, me)
+    if found is None:
+        return rule
+    return Rule(rule.kind, rule.label_id, rule.span, rule.args, rule.options, found, rule.soft, rule.values)

@@ -1,0 +1,123 @@
+"""`reachable by R`: the shipped reachable-set data against the arm's IK, and the specifier on it."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from prsc.constraints import lower_program
+from prsc.constraints.reach import reach_cell, reach_file
+from prsc.errors import PrscError
+from prsc.geometry.polytope import Polytope
+from prsc.geometry.sampler import prepare_sampler
+from prsc.ir import compile_program
+from prsc.sampling import Sampler
+
+REPO = Path(__file__).resolve().parents[2]
+REACH_SPEC = REPO / "specs" / "table_cube_reach.prs"
+
+
+@pytest.fixture(scope="module")
+def arm():
+    from prsc.backends.reach import TopDownReach
+
+    return TopDownReach()
+
+
+def _points(a: np.ndarray, b: np.ndarray, n: int, seed: int) -> np.ndarray:
+    return prepare_sampler(Polytope.from_rows(a, b)).sample(np.random.default_rng(seed), n)
+
+
+def test_the_cell_is_what_the_script_derives_from_its_ik_rays():
+    from prsc.backends import reach
+
+    data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
+    rays = {(k, j): (None if lo is None else (lo, hi)) for k, j, lo, hi in data["rays"]}
+    for k in range(len(data["heights"])):
+        rays[k, reach.SECTORS] = rays[k, 0]
+    a, b = reach.convex_cell(rays, reach._angles())
+    np.testing.assert_allclose(np.array(data["cell"]["A"]), a, atol=1e-12)
+    np.testing.assert_allclose(np.array(data["cell"]["b"]), b, atol=1e-12)
+
+
+def test_points_in_the_cell_are_reached_top_down_and_points_past_it_are_not(arm):
+    a, b = reach_cell("panda")
+    inside = _points(a, b, 10, seed=1)
+    assert all(arm.reaches(p) for p in inside), "a point of the shipped cell is out of the arm's reach"
+    # The same test fails on a wrong cell: pushed 30 cm out, the part past the longest
+    # radius the IK scan found (plus 5 cm) is out of reach.
+    data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
+    longest = max(hi for _, _, lo, hi in data["rays"] if hi is not None)
+    outer = a[:, :2].any(axis=1) & (b > 0)
+    candidates = _points(a, b + np.where(outer, 0.3, 0.0), 400, seed=2)
+    beyond = [p for p in candidates if math.hypot(p[0], p[1]) > longest + 0.05][:6]
+    assert len(beyond) == 6 and not any(arm.reaches(p) for p in beyond)
+
+
+def test_the_constraint_stage_reads_data_and_never_imports_mujoco():
+    code = (
+        "import sys; from prsc.ir import compile_program; from prsc.constraints import lower_program;"
+        f"lower_program(compile_program({str(REACH_SPEC)!r}, ()));"
+        "print(sorted(m for m in ('mujoco', 'mink', 'prsc.backends') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
+def test_reachable_cubes_are_sampled_exactly_inside_the_cell_and_fill_it():
+    program = compile_program(str(REACH_SPEC), ())
+    cprog = lower_program(program)
+    c1 = next(p for p in cprog.objects if p.name == "c1")
+    rule = next(r for r in c1.rules if r.kind == "reachable")
+    # r1 is fixed: the rule's rows are static, and the cube's region still moves with its tray.
+    assert rule.static and c1.region.anchor == "tr_1"
+    sampler = Sampler(program, "exact")
+    a, b = reach_cell("panda")
+    inside, local = 0, []
+    for index in range(300):
+        result = sampler.sample(11, index)
+        assert result.stats.total == 0
+        objects = {o.name: o for o in result.objects}
+        robot = objects["r1"]
+        base = robot.position - robot.rotation[:, 2] * robot.dims[2] / 2
+        q = robot.rotation.T @ (objects["c1"].position - base)
+        inside += bool(np.all(a @ q <= b + 1e-9))
+        local.append(q)
+    assert inside == 300
+    local = np.array(local)
+    # They spread over the reachable part of the tray: both near and far from the base.
+    radius = np.hypot(local[:, 0], local[:, 1])
+    assert radius.min() < 0.35 and radius.max() > 0.7
+
+
+def test_reachable_by_an_unknown_model_or_a_point_is_an_error_at_the_specifier(tmp_path):
+    spec = tmp_path / "ur.prs"
+    spec.write_text(
+        "from tabletop import *\n"
+        "arm = Robot at Vector3D(0, 0, 0.52), with model \"ur5\"\n"
+        "c = Cube at Vector3D((0.2, 0.3), 0.4, 0.1), reachable by arm\n", encoding="utf-8")
+    with pytest.raises(PrscError, match=r"no reachable-set data for arm's model 'ur5' \(known: panda\)") as caught:
+        lower_program(compile_program(str(spec), ()))
+    assert caught.value.span.line == 3
+    spec.write_text("from tabletop import *\nc = Cube reachable by Vector3D(0, 0, 1)\n", encoding="utf-8")
+    with pytest.raises(PrscError, match="`reachable by` needs a robot object, not a vector"):
+        compile_program(str(spec), ())
+
+
+def test_explain_shows_the_rows_and_their_source(capsys):
+    from prsc.cli import main
+
+    line = next(i for i, text in enumerate(REACH_SPEC.read_text().splitlines(), 1) if text.startswith("c1 = "))
+    assert main(["explain", str(REACH_SPEC)]) == 0
+    out = capsys.readouterr().out
+    assert f"reachable by r1  [containment; {REACH_SPEC}:{line}]" in out
+    assert main(["explain", str(REACH_SPEC), "--json"]) == 0
+    entry = next(e for e in json.loads(capsys.readouterr().out)["rules"] if e["kind"] == "reachable" and e["object"] == "c1")
+    assert entry["line"] == line and entry["rows_are"] == "the same in every scene" and len(entry["rows"]["A"]) > 4
+    assert not math.isnan(entry["rows"]["b"][0])
