@@ -63,7 +63,7 @@ clean:
 # measure how much of a tray it keeps; then the 200-episode demonstration (docs/sampling.md).
 .PHONY: reach reach-demo
 reach: $(STAMP)
-	$(PY) -m prsc.backends.reach
-	$(PY) -m prsc.backends.reach --tray-report specs/table_cube_reach.prs
+	$(PY) -m prsc.commands.reach
+	$(PY) -m prsc.commands.reach --tray-report specs/table_cube_reach.prs
 reach-demo: $(STAMP)
 	$(PRSC) run specs/table_cube_reach.prs -n 200 --seed 0 --jobs 2 -o out/reach
