@@ -85,7 +85,10 @@ def _known(model: str | None) -> bool:
 
 def cause(scene: Scene, obj: SceneObject) -> str:
     """The likely reason a free object moved, from what it was placed on."""
-    own = [] if _known(obj.model) else [f"its model {obj.model!r} is unknown, simulated as a plain {obj.shape}"]
+    own = [] if _known(obj.model) else [
+        f"its model {obj.model!r} is unknown, simulated as a solid box, and what was placed on its declared floor "
+        "pushes against it" if _interior(obj) is not None else f"its model {obj.model!r} is unknown, simulated as a plain {obj.shape}"
+    ]
     bottom, corners = _bottom(obj), _corners(obj)
     centre = np.asarray(obj.position, dtype=float)[None, :]
     for support in scene.objects:
