@@ -85,6 +85,7 @@ def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan)
         support = Support(None, np.array(dims) * 0.5, orientation.bound_mode)  # type: ignore[union-attr]
     me = ObjectValue(name, obj.class_name, obj.span, None, rotation, dims, dict(static_props))
 
+    rests_in = containers_rested_in(low, obj)  # first: it refuses a container interior that varies
     rules: list[Rule] = []
     for spec in obj.specifiers:
         rule = specifier_rule(low, obj, spec, support, me)
@@ -125,7 +126,7 @@ def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan)
         depends_on=tuple(obj.depends_on),
         static_position=static_position,
         static_support=support,
-        rests_in=containers_rested_in(low, obj),
+        rests_in=rests_in,
     )
 
 

@@ -13,8 +13,7 @@ import numpy as np
 from prsc.constraints.model import Support
 from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
-from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES
-from prsc.geometry.container import Interior, declared_interior
+from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES, Interior, declared_interior
 from prsc.geometry.polytope import Polytope
 
 _EYE = np.eye(3)
@@ -115,11 +114,11 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
 
 def interior_of(target: ObjectValue, span: Span | None) -> Interior | None:
     """The container interior the object's class declares (docs/language.md, "Containers"), if any."""
-    declared = {k: target.props[k] for k in INTERIOR_PROPERTIES if k in target.props}
-    if not declared and not any(k in target.property_fns for k in INTERIOR_PROPERTIES):
-        return None
-    if len(declared) < len(INTERIOR_PROPERTIES) and any(k in target.property_fns for k in INTERIOR_PROPERTIES):
+    if any(k in target.property_fns and k not in target.props for k in INTERIOR_PROPERTIES):
         raise PrscError(f"the interior of {target.name} ({', '.join(INTERIOR_PROPERTIES)}) must be constants", span)
+    declared = {k: target.props[k] for k in INTERIOR_PROPERTIES if k in target.props}
+    if not declared:
+        return None
     try:
         return declared_interior(target.dims, declared)  # type: ignore[arg-type]
     except ValueError as error:
