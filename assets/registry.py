@@ -41,6 +41,9 @@ PART_ASSETS: dict[str, Recipe] = {
 }
 """Rigid assets built from primitives, by normalised model name."""
 
+HOLLOW_ASSETS: frozenset[str] = frozenset({"tray", "bin", "box", "bowl", "cup", "bucket", "plate"})
+"""Part assets built open at the top (a floor and walls): what rests on their box top falls in."""
+
 ROBOT_ASSETS: tuple[str, ...] = ("panda",)
 """Articulated robot models the backends know how to mount."""
 
@@ -61,3 +64,8 @@ def is_robot(model: str | None) -> str | None:
         return None
     key = normalise_model(model)
     return key if key in ROBOT_ASSETS else None
+
+
+def is_hollow(model: str | None) -> bool:
+    """Whether a model name is a container asset (built as a floor and walls)."""
+    return model is not None and normalise_model(model) in HOLLOW_ASSETS

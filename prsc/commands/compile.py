@@ -37,6 +37,7 @@ from prsc.commands.output_folder import (
     lock_folder, output_root, prepare_root, record_file, remove_listed, write_manifest,
 )
 from prsc.commands.scene_sources import read_input, read_scene_file, spec_sampler
+from prsc.commands.settle import SETTLE_HELP, settle_check, settle_targets
 from prsc.errors import PrscError
 
 
@@ -57,6 +58,7 @@ def add_parser(subparsers: Any) -> None:
                         help="let `with mesh` read absolute paths and paths outside the spec's and --include folders")
     parser.add_argument("--force", action="store_true",
                         help="replace the scenes of another spec or seed in the output folder (only files its manifest lists)")
+    parser.add_argument("--settle-check", action="store_true", help=SETTLE_HELP)
     add_executor_arguments(parser)
 
 
@@ -391,6 +393,7 @@ def run(args: argparse.Namespace) -> int:
     targets = list(dict.fromkeys(t.strip() for t in str(args.target).split(",") if t.strip()))
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="fork")
-    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
-                   args.force, args.meshes_anywhere)
-    return 0
+    settle_targets(targets, args.settle_check)
+    root = compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
+                          args.force, args.meshes_anywhere)
+    return settle_check(root, args.scenes, Path(args.file).suffix in (".json", ".jsonl")) if args.settle_check else 0

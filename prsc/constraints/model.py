@@ -159,6 +159,8 @@ class ObjectPlan:
     static_position: np.ndarray | None = None
     # The object's support function when it is the same in every scene.
     static_support: Support | None = None
+    # Containers this object rests inside (`on X`, X declaring an interior): not collision obstacles.
+    rests_in: tuple[int, ...] = ()
 
     @property
     def rules(self) -> tuple[Rule, ...]:

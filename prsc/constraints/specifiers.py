@@ -13,6 +13,7 @@ import numpy as np
 from prsc.constraints.model import Support
 from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
+from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES, Interior, declared_interior
 from prsc.geometry.polytope import Polytope
 
 _EYE = np.eye(3)
@@ -92,6 +93,9 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
     """`[completely] on X` for an object, a planar region or a point."""
     if isinstance(target, ObjectValue):
         pos, rot, dims = _placed(target, span)
+        interior = interior_of(target, span)
+        if interior is not None:
+            return _rows_in_container(pos, rot, interior, completely, support, label)
         u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
         top = pos + n * (dims[2] * 0.5)
         s = support(np.stack([n, u, v]))
@@ -106,6 +110,32 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
     if point is not None:
         return _point_rows(point + _UP * float(support(_UP[None, :])[0]), label)
     raise PrscError("'on' needs an object, a planar region or a point", span)
+
+
+def interior_of(target: ObjectValue, span: Span | None) -> Interior | None:
+    """The container interior the object's class declares (docs/language.md, "Containers"), if any."""
+    if any(k in target.property_fns and k not in target.props for k in INTERIOR_PROPERTIES):
+        raise PrscError(f"the interior of {target.name} ({', '.join(INTERIOR_PROPERTIES)}) must be constants", span)
+    declared = {k: target.props[k] for k in INTERIOR_PROPERTIES if k in target.props}
+    if not declared:
+        return None
+    try:
+        return declared_interior(target.dims, declared)  # type: ignore[arg-type]
+    except ValueError as error:
+        raise PrscError(f"{target.name}: {error}", span) from None
+
+
+def _rows_in_container(
+    pos: np.ndarray, rot: np.ndarray, interior: Interior, completely: bool, support: Support, label: int
+) -> Polytope:
+    """On a container: rest on its floor's top, centre (footprint if completely) inside the walls."""
+    u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
+    normals, offsets = interior.edges()
+    a = normals[:, :1] * u + normals[:, 1:] * v
+    b = a @ pos + offsets - (support(a) if completely else 0.0)
+    floor = pos + n * interior.floor_top
+    rest = float(n @ floor + support(n[None, :])[0])
+    return Polytope(a, b, n[None, :], np.array([rest]), np.full(len(b), label), np.full(1, label))
 
 
 def _rows_on_surface(region: RegionValue, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:

@@ -224,7 +224,7 @@ class SequentialSampler:
         candidates: list[PlacedBox] = []
         if run.placed and not self.joint and not allow:
             lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
-            candidates = near(run.placed, lo, hi, reach)
+            candidates = near(run.placed, lo, hi, reach, containers=rt.plan.rests_in)
         checks = () if self.joint else tuple(c for c in rt.plan.checks if c.soft is None or c.soft in ctx.active_requires)
         if not candidates and not checks:
             p = region.draw(rng, method, walk)
@@ -320,7 +320,8 @@ class SequentialSampler:
         for i, q in enumerate(placed):
             if q.allow:
                 continue
-            others = near(placed[:i], np.array(q.center), np.array(q.center), q.reach)
+            others = near(placed[:i], np.array(q.center), np.array(q.center), q.reach,
+                          containers=self.runtimes[q.index].plan.rests_in)
             hit = first_hit(others, q.box.center, q.box.rotation, q.box.half_extents, q.reach)
             if hit is not None:
                 run.stats.add(COLLISION)
