@@ -6,18 +6,14 @@ contacts, not 20 (walls reaching down to the table made four each, and were most
 contacts MuJoCo solved in a Table-Cube episode). A round container (prsc.assets.vessel)
 has a disc floor and a ring of wall slabs. The thicknesses come from the object's
 declared interior (the model library declares them per class, docs/language.md), else
-from the recipe's defaults below.
+from the asset's own (prsc.geometry.container.ASSET_INTERIORS), which the sampler reads too.
 """
 
 from __future__ import annotations
 
 from prsc.assets.parts import Part, box
 from prsc.assets.vessel import vessel_parts
-from prsc.geometry.container import Interior, fit_interior
-
-
-def _clamp(value: float, low: float, high: float) -> float:
-    return max(low, min(high, value))
+from prsc.geometry.container import Interior, asset_interior
 
 
 def open_box_parts(interior: Interior) -> tuple[Part, ...]:
@@ -41,19 +37,15 @@ def container_parts(interior: Interior) -> tuple[Part, ...]:
 
 
 def tray_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A shallow tray: floor 20% of the height (5-15 mm), walls 4% of the short side (3-12 mm)."""
-    w, l, h = dimensions
-    return open_box_parts(fit_interior(dimensions, _clamp(0.2 * h, 0.005, 0.015), _clamp(0.04 * min(w, l), 0.003, 0.012), "box"))
+    """A shallow tray with the tray asset's interior (prsc.geometry.container.ASSET_INTERIORS)."""
+    return open_box_parts(asset_interior("tray", dimensions))
 
 
 def bin_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A storage bin: floor 5% of the height (5-15 mm), walls 3% of the short side (4-15 mm)."""
-    w, l, h = dimensions
-    return open_box_parts(fit_interior(dimensions, _clamp(0.05 * h, 0.005, 0.015), _clamp(0.03 * min(w, l), 0.004, 0.015), "box"))
+    """A storage bin with the bin asset's interior."""
+    return open_box_parts(asset_interior("bin", dimensions))
 
 
 def box_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A cardboard-like open box: thin floor and walls (2% of the short side, 3-10 mm)."""
-    w, l, h = dimensions
-    t = _clamp(0.02 * min(w, l), 0.003, 0.01)
-    return open_box_parts(fit_interior(dimensions, t, t, "box"))
+    """A cardboard-like open box with the box asset's interior."""
+    return open_box_parts(asset_interior("box", dimensions))

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from prsc.assets.parts import Part, box, cylinder
-from prsc.geometry.container import ROUND_SIDES, Interior, fit_interior
+from prsc.geometry.container import ROUND_SIDES, Interior, asset_interior
 
 
 def vessel_parts(interior: Interior) -> tuple[Part, ...]:
@@ -34,27 +34,21 @@ def vessel_parts(interior: Interior) -> tuple[Part, ...]:
     return tuple(parts)
 
 
-def _fractions(dimensions: tuple[float, float, float], wall_fraction: float, floor_fraction: float) -> Interior:
-    """A round interior with walls and floor as fractions of the radius and height (>= 2 mm)."""
-    radius, h = min(dimensions[0], dimensions[1]) / 2, dimensions[2]
-    return fit_interior(dimensions, max(floor_fraction * h, 0.002), max(wall_fraction * radius, 0.002), "round")
-
-
 def bowl_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A bowl: wide, low walls and a thick base."""
-    return vessel_parts(_fractions(dimensions, wall_fraction=0.06, floor_fraction=0.15))
+    """A bowl with the bowl asset's interior (prsc.geometry.container.ASSET_INTERIORS)."""
+    return vessel_parts(asset_interior("bowl", dimensions))
 
 
 def cup_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A cup: tall walls and a thin base."""
-    return vessel_parts(_fractions(dimensions, wall_fraction=0.08, floor_fraction=0.08))
+    """A cup with the cup asset's interior."""
+    return vessel_parts(asset_interior("cup", dimensions))
 
 
 def bucket_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A bucket: tall thin walls."""
-    return vessel_parts(_fractions(dimensions, wall_fraction=0.04, floor_fraction=0.05))
+    """A bucket with the bucket asset's interior."""
+    return vessel_parts(asset_interior("bucket", dimensions))
 
 
 def plate_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A plate: a thick disc with a low rim."""
-    return vessel_parts(_fractions(dimensions, wall_fraction=0.05, floor_fraction=0.4))
+    """A plate with the plate asset's interior."""
+    return vessel_parts(asset_interior("plate", dimensions))

@@ -3,14 +3,16 @@
 The one description of a container that the sampler (where things rest on it) and every
 backend (the floor and wall solids they build) read. A class declares it with the
 properties `floorThickness`, `wallThickness` and `container` ("box" or "round");
-docs/language.md, "Containers".
+docs/language.md, "Containers". A container asset whose class declares none is built with
+the asset's own interior (ASSET_INTERIORS), which the sampler does not know: there the
+object rests on the rim, and `prsc compile --settle-check` says so.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -80,3 +82,44 @@ def declared_interior(dimensions: tuple[float, float, float], properties: Mappin
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
             raise ValueError(f"{name} must be a number >= 0, not {value!r}")
     return fit_interior(dimensions, floor, wall, str(shape))
+
+
+def _clamp(value: float, low: float, high: float) -> float:
+    return max(low, min(high, value))
+
+
+def _box_asset(floor_fraction: float, floor_range: tuple[float, float], wall_fraction: float,
+               wall_range: tuple[float, float]) -> Callable[[tuple[float, float, float]], Interior]:
+    """A box container asset's interior: floor a fraction of the height, walls of the short side, clamped."""
+    def interior(dimensions: tuple[float, float, float]) -> Interior:
+        w, l, h = dimensions
+        return fit_interior(dimensions, _clamp(floor_fraction * h, *floor_range),
+                            _clamp(wall_fraction * min(w, l), *wall_range), "box")
+    return interior
+
+
+def _round_asset(wall_fraction: float, floor_fraction: float) -> Callable[[tuple[float, float, float]], Interior]:
+    """A round vessel asset's interior: walls and floor as fractions of the radius and height (>= 2 mm)."""
+    def interior(dimensions: tuple[float, float, float]) -> Interior:
+        radius, h = min(dimensions[0], dimensions[1]) / 2, dimensions[2]
+        return fit_interior(dimensions, max(floor_fraction * h, 0.002), max(wall_fraction * radius, 0.002), "round")
+    return interior
+
+
+ASSET_INTERIORS: dict[str, Callable[[tuple[float, float, float]], Interior]] = {
+    "tray": _box_asset(0.2, (0.005, 0.015), 0.04, (0.003, 0.012)),  # shallow: a thick floor
+    "bin": _box_asset(0.05, (0.005, 0.015), 0.03, (0.004, 0.015)),
+    "box": lambda d: fit_interior(d, *(_clamp(0.02 * min(d[0], d[1]), 0.003, 0.01),) * 2, "box"),  # cardboard-like
+    "bowl": _round_asset(wall_fraction=0.06, floor_fraction=0.15),  # wide, low walls, thick base
+    "cup": _round_asset(wall_fraction=0.08, floor_fraction=0.08),
+    "bucket": _round_asset(wall_fraction=0.04, floor_fraction=0.05),
+    "plate": _round_asset(wall_fraction=0.05, floor_fraction=0.4),  # a thick disc, a low rim
+}
+"""The interior each container asset is built with when its class declares none, by model name."""
+
+
+def asset_interior(model: str | None, dimensions: tuple[float, float, float]) -> Interior | None:
+    """The interior of container asset `model` fitted to the box, or None for other models."""
+    recipe = ASSET_INTERIORS.get(model or "")
+    return None if recipe is None else recipe(tuple(float(v) for v in dimensions))  # type: ignore[arg-type]
+
