@@ -21,7 +21,6 @@ import argparse
 import functools
 import hashlib
 import itertools
-import json
 import os
 import shutil
 import sys
@@ -37,9 +36,8 @@ from prsc.commands.output_folder import (
     CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
     lock_folder, output_root, prepare_root, record_file, remove_listed, write_manifest,
 )
-from prsc.commands.scene_sources import (
-    add_proposal_argument, proposal_from_json, read_input, read_proposal, read_scene_file, spec_sampler,
-)
+from prsc.commands.scene_sources import add_proposal_argument, proposal_from_json, proposal_key, read_input
+from prsc.commands.scene_sources import read_proposal, read_scene_file, spec_sampler
 from prsc.errors import PrscError
 
 
@@ -225,8 +223,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
     (--include) are searched for a spec's imports and meshes; `executor` (default: `jobs`
     forked local processes) runs the scenes; `force` replaces the listed scenes of another
-    spec or seed; `meshes_anywhere` lets meshes come from any folder; `proposal` (a spec only)
-    draws the scenes from a falsification proposal's JSON instead of the spec's law."""
+    spec or seed; `meshes_anywhere` lets meshes come from any folder; `proposal` draws from a falsify proposal."""
     from prsc.backends import TARGETS
 
     unknown = [t for t in targets if t not in TARGETS]
@@ -244,8 +241,6 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     root = output_root(Path(output), path)
     program: Any = None  # the spec's IR, for errors a backend reports by object
     if path.suffix in (".json", ".jsonl"):
-        if proposal is not None:
-            raise PrscError("--proposal draws new scenes from a .prs spec; it does not apply to scene JSON")
         data = read_input(path)
         scenes: list[dict] | None = read_scene_file(path, data)
         sources = hashlib.sha256(data)
@@ -268,8 +263,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             # The scenes also depend on every imported file (those found through --include
             # too): a change there makes them stale.
             sources.update(read_input(Path(imported)))
-        if proposal is not None:  # other scenes: what a folder drawn from another proposal holds is stale
-            sources.update(json.dumps(proposal, sort_keys=True).encode("utf-8"))
+        sources.update(proposal_key(proposal))  # scenes drawn from another proposal are stale
     if executor is None:
         jobs = worker_count(jobs)
     width = max(DEFAULT_WIDTH, len(str(max(n - 1, 0))))
@@ -402,5 +396,5 @@ def run(args: argparse.Namespace) -> int:
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="fork")
     compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
-                   args.force, args.meshes_anywhere, read_proposal(args.proposal))
+                   args.force, args.meshes_anywhere, read_proposal(args.proposal, args.file))
     return 0

@@ -180,9 +180,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.commands.executors import make_executor, worker_count
 
     source = Path(args.file)
-    proposal = read_proposal(args.proposal)
-    if proposal is not None and source.suffix != ".prs":
-        raise PrscError("--proposal draws new scenes from a .prs spec; it does not apply to scene JSON")
+    proposal = read_proposal(args.proposal, args.file)
     controller_ref = parse_target(args.controller)
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)

@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         if value < 0:
             raise PrscError(f"{option} must be >= 0, got {value}")
     target = None if args.output is None else output_file(args.output)
-    proposal = proposal_from_json(read_proposal(args.proposal))
+    proposal = proposal_from_json(read_proposal(args.proposal, args.file))
     sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length, joint=args.joint,
                               proposal=proposal)
     if target is None:

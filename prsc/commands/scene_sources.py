@@ -113,13 +113,20 @@ def add_proposal_argument(parser: Any) -> None:
                              "the hard cases, still satisfying the spec")
 
 
-def read_proposal(path: str | None) -> dict | None:
-    """The JSON of --proposal (validated), or None."""
+def read_proposal(path: str | None, source: str) -> dict | None:
+    """The JSON of --proposal (validated), or None; an error when the input is scene JSON, not a spec."""
     if path is None:
         return None
+    if Path(source).suffix in (".json", ".jsonl"):
+        raise PrscError("--proposal draws new scenes from a .prs spec; it does not apply to scene JSON")
     from prsc.sampling.proposal import load_proposal
 
     return load_proposal(path).to_json()
+
+
+def proposal_key(data: dict | None) -> bytes:
+    """The bytes that identify a proposal in a folder's source digest (none without one)."""
+    return b"" if data is None else json.dumps(data, sort_keys=True).encode("utf-8")
 
 
 def proposal_from_json(data: dict | None) -> Any:
