@@ -23,9 +23,11 @@ from pathlib import Path
 from typing import Any
 
 from prsc.commands.executors import add_executor_arguments
+from prsc.constraints.model import COLLISION
 from prsc.errors import PrscError
 
 METHODS = ("cross-entropy", "uniform")
+MARKER = "falsify.json"  # what this folder's campaign was: its results.jsonl is prsc falsify's own
 
 
 def add_parser(subparsers: Any) -> None:
@@ -58,7 +60,7 @@ def round_sizes(budget: int, rounds: int) -> list[int]:
     return [base + (1 if r < extra else 0) for r in range(rounds) if base + (1 if r < extra else 0) > 0]
 
 
-def draw_round(sampler: Any, proposal: Any, seed: int, start: int, count: int) -> tuple[list[dict], list[dict], dict]:
+def draw_round(sampler: Any, seed: int, start: int, count: int) -> tuple[list[dict], list[dict], dict]:
     """Scenes start..start+count-1 from the proposal: (scene JSON, per-scene weight info, cell masses by site)."""
     scenes, info, masses = [], [], {}
     for index in range(start, start + count):
@@ -70,7 +72,7 @@ def draw_round(sampler: Any, proposal: Any, seed: int, start: int, count: int) -
             continue
         masses.update(state.masses)
         info.append({"weight": state.weight(), "features": state.features(),
-                     "collision_rejections": int(result.stats.by_cause().get("collision", 0))})
+                     "collision_rejections": int(result.stats.counts.get(COLLISION, 0))})
     return scenes, info, masses
 
 
@@ -106,7 +108,12 @@ def run(args: argparse.Namespace) -> int:
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="spawn")
     out = args.output or Path("out") / f"falsify-{source.stem}"
+    if (out / "results.jsonl").exists() and not (out / MARKER).exists() and not args.force:
+        raise PrscError(f"{out} holds a results.jsonl that prsc falsify did not write; "
+                        "choose another output folder, or pass --force to replace it")
     (out / "scenes").mkdir(parents=True, exist_ok=True)
+    atomic_write(out / MARKER, json.dumps({"spec": str(source), "seed": args.seed, "method": args.method,
+                                           "budget": args.budget, "rounds": args.rounds}) + "\n")
     console = Console(stderr=True)
     proposal = Proposal()
     sampler = compile_sampler(str(source), args.include, proposal=proposal if args.method != "uniform" else None)
@@ -116,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     for number, size in enumerate(round_sizes(args.budget, args.rounds)):
         if args.method != "uniform":
             sampler = compile_sampler(str(source), args.include, proposal=proposal)
-        scenes, info, seen = draw_round(sampler, proposal, args.seed, start, size)
+        scenes, info, seen = draw_round(sampler, args.seed, start, size)
         masses.update(seen)
         check = getattr(controller, "check", None)
         if check is not None:
@@ -142,11 +149,12 @@ def run(args: argparse.Namespace) -> int:
             records.append(record)
         failed = sum(r["outcome"] != "success" for r in records[start:])
         console.print(f"round {number}: {size} episodes, {failed} failed")
+        # Each round's records at once (whole file, atomically): a kill loses at most a round.
+        atomic_write(out / "results.jsonl", "".join(json.dumps(r, separators=(", ", ": ")) + "\n" for r in records))
         start += size
         if args.method == "cross-entropy":
             episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
             proposal = cross_entropy_step(proposal, masses, episodes)
-    atomic_write(out / "results.jsonl", "".join(json.dumps(r, separators=(", ", ": ")) + "\n" for r in records))
     atomic_write(out / "proposal.json", json.dumps(proposal.to_json(), indent=1) + "\n")
     table = write_report(records, proposal, masses, out, f"{source.name}: falsify ({args.method}), "
                          f"budget {args.budget}, seed {args.seed}", declared)

@@ -10,6 +10,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+SHOWN = 10  # clusters listed in the summary (all are in clusters.json)
 CLUSTER_RADIUS = 0.1  # normalised units per coordinate: failures this close are one scene repeated
 
 
@@ -92,9 +93,11 @@ def write_report(records: Sequence[dict], proposal: Any, masses: dict, out: Path
     table.add_section()
     rows = summary_lines(records, proposal.law)
     rows.append(("distinct failure clusters", str(len(clusters))))
-    for k, cluster in enumerate(clusters):
+    for k, cluster in enumerate(sorted(clusters, key=lambda c: -len(c["episodes"]))[:SHOWN]):
         labels = ", ".join(f"{o} {n}" for o, n in sorted(cluster["outcomes"].items()))
         rows.append((f"  cluster {k} (episode {cluster['leader']})", f"{len(cluster['episodes'])}: {labels}"))
+    if len(clusters) > SHOWN:
+        rows.append((f"  ... {len(clusters) - SHOWN} more", "clusters.json"))
     for label, value in rows:
         table.add_row(label, value)
     atomic_write(out / "summary.txt", "\n".join(f"{label}: {value}" for label, value in rows) + "\n")

@@ -12,7 +12,8 @@ so "the corner of the tray" is the same cell wherever the tray went. The density
 a draw is p/q = 1 / (eps + (1 - eps) w_c / f_c), f_c the spec's mass of cell c (its share
 of the region's measure), so the scene's importance weight under the *sequential* law
 (docs/sampling.md) is the product over its sites (docs/falsify.md says what it targets).
-With w_c = f_c (the initial proposal) q is the spec's law and every ratio is 1.
+A site without weights (every site of the initial proposal) draws exactly as the spec's law
+does, draw for draw, with ratio 1: round 0 of a campaign is the scenes `prsc sample` draws.
 """
 
 from __future__ import annotations
@@ -205,8 +206,12 @@ class ProposalState:
             return region.draw(ctx.rng, "exact", 1)
         site = f"position:{name}"
         self.masses[site] = cells.mass
+        if site not in self.proposal.weights:  # the spec's law, draw for draw as without a proposal
+            p = region.draw(ctx.rng, "exact", 1)
+            self.draws[(site, level)] = Draw(1.0, [round(float(x), 6) for x in cells.coords(p)])
+            return p
         cell, weights = self._pick(site, cells.mass, ctx.uniform(), ctx.uniform())
-        while cell is not None and cells.samplers[cell] is None:
+        if cell is not None and cells.samplers[cell] is None:
             cell = None  # rounding put the pick on an empty cell: fall back to the spec's law
         p = region.draw(ctx.rng, "exact", 1) if cell is None else cells.samplers[cell].sample_one(ctx.rng)
         at = cells.cell_of(p)
@@ -224,6 +229,10 @@ class ProposalState:
         mass = np.full(RANGE_BINS, 1.0 / RANGE_BINS)
         site = f"range:{site}"
         self.masses[site] = mass
+        if site not in self.proposal.weights:  # the spec's law, draw for draw as without a proposal
+            u = ctx.uniform()
+            self.draws[(site, ctx.level)] = Draw(1.0, [round(u, 6)])
+            return u
         cell, weights = self._pick(site, mass, ctx.uniform(), ctx.uniform())
         x = ctx.uniform()
         u = x if cell is None else (cell + x) / RANGE_BINS

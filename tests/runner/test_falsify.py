@@ -79,3 +79,9 @@ def test_proposal_errors_are_clear(tmp_path, capsys):
     assert main(["compile", str(scene), "--proposal", str(bad), "-o", str(tmp_path / "c")]) == 2
     assert "does not apply to scene JSON" in capsys.readouterr().err
     assert main(["falsify", str(SPEC), "--budget", "0", "--controller", CORNER]) == 2
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "results.jsonl").write_text("a campaign of prsc run\n")
+    assert main(["falsify", str(SPEC), "--budget", "1", "--controller", CORNER, "-o", str(other)]) == 2
+    assert "did not write" in capsys.readouterr().err
+    assert (other / "results.jsonl").read_text() == "a campaign of prsc run\n"
