@@ -270,3 +270,27 @@ def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episod
         new = smoothing * target / target.sum() + (1 - smoothing) * old / old.sum()
         weights[site] = [round(float(x), 9) for x in new / new.sum()]
     return Proposal(weights, proposal.eps, proposal.law)
+
+
+def failure_rate_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
+                      sharpness: float = 2.0) -> Proposal:
+    """Per site, weights proportional to each cell's spec mass times its failure rate to the power `sharpness`.
+
+    The rate of a cell is (failures + 1) / (episodes + 2) over every episode so far that drew in
+    it (a Beta(1, 1) prior: a cell never tried counts as even odds, so it is explored). Unlike
+    the cross-entropy step it follows where failures are *frequent*, not where their
+    weighted mass lies, and a site the outcome does not depend on keeps near-equal rates and
+    so stays near the spec's law."""
+    weights = dict(proposal.weights)
+    for site, mass in masses.items():
+        tried, failed = np.zeros(len(mass)), np.zeros(len(mass))
+        for features, _, fail in episodes:
+            if site in features:
+                cell = cell_index(features[site], len(mass))
+                tried[cell] += 1
+                failed[cell] += fail
+        if not failed.sum() > 0:
+            continue
+        new = mass * ((failed + 1) / (tried + 2)) ** sharpness
+        weights[site] = [round(float(x), 9) for x in new / new.sum()]
+    return Proposal(weights, proposal.eps, proposal.law)

@@ -14,7 +14,7 @@ from prsc.commands.falsify_report import failure_clusters, weighted_estimate
 from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import compile_sampler
-from prsc.sampling.proposal import Proposal, cross_entropy_step
+from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_rate_step
 from tests.data.corner_controller import in_corner
 from tests.sampling.scene_checks import check_scenes
 
@@ -22,8 +22,8 @@ SPEC = Path(__file__).resolve().parents[2] / "specs" / "table_cube.prs"
 SEED = 3
 
 
-def _rounds(rounds: int, size: int) -> tuple[list[dict], list[Proposal], list[dict]]:
-    """Cross-entropy rounds against the corner controller: (records, proposals used, scenes)."""
+def _rounds(rounds: int, size: int, step=cross_entropy_step) -> tuple[list[dict], list[Proposal], list[dict]]:
+    """Rounds of `step` against the corner controller: (records, proposals used, scenes)."""
     proposal, records, used, scenes, masses = Proposal(), [], [], [], {}
     for number in range(rounds):
         sampler = compile_sampler(str(SPEC), proposal=proposal)
@@ -35,7 +35,7 @@ def _rounds(rounds: int, size: int) -> tuple[list[dict], list[Proposal], list[di
             records.append({"index": scene["index"], "round": number, "weight": extra["weight"],
                             "features": extra["features"], "outcome": "corner" if in_corner(scene) else "success"})
         episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
-        proposal = cross_entropy_step(proposal, masses, episodes)
+        proposal = step(proposal, masses, episodes)
     return records, used, scenes
 
 
@@ -48,9 +48,9 @@ def corner_probability() -> tuple[float, float]:
     return p, math.sqrt(p * (1 - p) / len(hits))
 
 
-@pytest.fixture(scope="module")
-def campaign():
-    return _rounds(6, 100)
+@pytest.fixture(scope="module", params=[cross_entropy_step, failure_rate_step], ids=["cross-entropy", "failure-rate"])
+def campaign(request):
+    return _rounds(6, 100, request.param)
 
 
 def test_the_initial_proposal_is_the_spec_law():
