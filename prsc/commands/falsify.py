@@ -1,13 +1,14 @@
 """`prsc falsify`: spend an episode budget where a controller fails, still inside the spec.
 
     prsc falsify FILE --controller TARGET --budget N --seed S [-o DIR] [--jobs J]
-                 [--executor local|ray] [--method cross-entropy|uniform] [--rounds R]
+                 [--executor local|ray] [--method cross-entropy|failure-rate|uniform] [--rounds R]
 
 runs the budget in rounds. Every round's scenes are drawn by the exact sequential sampler
 from a proposal that only reweights the feasible set (prsc/sampling/proposal.py: per
 object position and per range draw, a defensive mixture of the spec's law and grid cells
 of the exact region), compiled as `prsc compile --target json,mjcf` does (DIR/round_RR/),
-and simulated; then a cross-entropy step moves the proposal toward the failed scenes.
+and simulated; then a cross-entropy step (or --method failure-rate) moves the proposal
+toward the failed scenes.
 Each episode of DIR/results.jsonl carries `round`, `weight` (the spec's sequential-law
 density over the proposal's) and `law`; the summary gives the importance-weighted
 failure probability under the spec's sequential law with a 95 % interval. Also in DIR:
