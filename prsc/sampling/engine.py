@@ -221,7 +221,7 @@ class SequentialSampler:
         """Draw the object's position (and late rotation); True when accepted."""
         ctx = run.ctx
         rng = ctx.rng
-        method, walk = self.method, self.walk_length
+        method = self.method
         reach = rt.reach
         if reach is None:
             mode = "exact" if obj.rotation is not None else rt.plan.orientation.bound_mode  # type: ignore[union-attr]
