@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from prsc.commands.executors import add_executor_arguments
+from prsc.commands.scene_sources import add_proposal_argument, read_proposal
 from prsc.errors import PrscError
 
 RESULTS = "results.jsonl"
@@ -49,6 +50,7 @@ def add_parser(subparsers) -> None:
                         help=f"end an episode past S simulated seconds as outcome `timeout` (default {DEFAULT_MAX_SIM_SECONDS:g})")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     add_executor_arguments(parser)
+    add_proposal_argument(parser)
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
@@ -178,6 +180,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.commands.executors import make_executor, worker_count
 
     source = Path(args.file)
+    proposal = read_proposal(args.proposal, args.file)
     controller_ref = parse_target(args.controller)
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)
@@ -194,7 +197,8 @@ def run(args: argparse.Namespace) -> int:
     is_json = source.suffix in (".json", ".jsonl")
     count = args.n if args.n is not None else (0 if is_json else 10)
     root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs, args.include,
-                          make_executor(args.executor, jobs, args.address, start="fork"), force=args.force)
+                          make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
+                          proposal=proposal)
     pairs = _compiled(root, count)
     scenes = [scene for scene, _ in pairs]
     if check is not None:

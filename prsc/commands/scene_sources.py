@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from prsc.errors import PrscError, Span
 
@@ -98,9 +98,41 @@ def _nesting_place(text: str, limit: int) -> tuple[int, int]:
     return 1, 1
 
 
-def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = ()) -> Callable[[int], dict]:
+def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), proposal: dict | None = None) -> Callable[[int], dict]:
     """Scene k of a .prs spec as scene JSON (the sampler is imported only when needed)."""
     from prsc.sampling import compile_sampler
 
-    sampler = compile_sampler(spec, include_dirs=include_dirs)
+    sampler = compile_sampler(spec, include_dirs=include_dirs, proposal=proposal_from_json(proposal))
     return lambda index: sampler.scene(seed=seed, index=index)
+
+
+def add_proposal_argument(parser: Any) -> None:
+    """`--proposal DIR/proposal.json` (sample, compile, run)."""
+    parser.add_argument("--proposal", metavar="JSON", default=None,
+                        help="draw scenes from a proposal `prsc falsify` learnt (DIR/proposal.json): "
+                             "the hard cases, still satisfying the spec")
+
+
+def read_proposal(path: str | None, source: str) -> dict | None:
+    """The JSON of --proposal (validated), or None; an error when the input is scene JSON, not a spec."""
+    if path is None:
+        return None
+    if Path(source).suffix in (".json", ".jsonl"):
+        raise PrscError("--proposal draws new scenes from a .prs spec; it does not apply to scene JSON")
+    from prsc.sampling.proposal import load_proposal
+
+    return load_proposal(path).to_json()
+
+
+def proposal_key(data: dict | None) -> bytes:
+    """The bytes that identify a proposal in a folder's source digest (none without one)."""
+    return b"" if data is None else json.dumps(data, sort_keys=True).encode("utf-8")
+
+
+def proposal_from_json(data: dict | None) -> Any:
+    """A Proposal from its JSON, or None."""
+    if data is None:
+        return None
+    from prsc.sampling.proposal import Proposal
+
+    return Proposal.from_json(data)

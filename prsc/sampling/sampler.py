@@ -18,6 +18,7 @@ from prsc.constraints.model import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
+from prsc.sampling.proposal import Proposal
 from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
 from prsc.sampling.scene_json import object_template, scene_json
 
@@ -38,7 +39,10 @@ class Sampler:
         max_attempts: int = DEFAULT_ATTEMPTS,
         spec: str | None = None,
         constraints: ConstraintProgram | None = None,
+        proposal: Proposal | None = None,
     ) -> None:
+        if proposal is not None and (sampler != "exact" or joint):
+            raise PrscError("--proposal draws with the exact sequential sampler (not with --sampler or --joint)")
         if sampler not in SAMPLERS:
             raise PrscError(f"unknown sampler {sampler!r} (choose from {', '.join(SAMPLERS)})")
         if walk_length < 1:
@@ -57,7 +61,7 @@ class Sampler:
         if sampler == "rejection":
             self._engine = RejectionSampler(self.constraints, max_attempts)
         else:
-            self._engine = SequentialSampler(self.constraints, sampler, walk_length, joint, limits)
+            self._engine = SequentialSampler(self.constraints, sampler, walk_length, joint, limits, proposal)
 
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
@@ -80,7 +84,7 @@ class Sampler:
 def compile_sampler(
     path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = (), sampler: str = "exact", **opts: Any
 ) -> Sampler:
-    """Compile a .prs file into a Sampler (opts: walk_length, joint, limits, max_attempts)."""
+    """Compile a .prs file into a Sampler (opts: walk_length, joint, limits, max_attempts, proposal)."""
     from prsc.ir import compile_program
 
     program = compile_program(path, include_dirs)
