@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from prsc.constraints.state import LoweringState
 from prsc.errors import PrscError
-from prsc.geometry.container import PROPERTIES
+from prsc.geometry.container import ASSET_INTERIORS, PROPERTIES
+from prsc.ir.models import model_of
 from prsc.ir import model as ir
 
 
@@ -27,10 +28,20 @@ def declares_interior(low: LoweringState, name: str) -> bool:
     return True
 
 
+def is_container_asset(low: LoweringState, name: str) -> bool:
+    """Whether object `name` declares no interior but is built as a container asset (its own interior)."""
+    decl = low.program.objects[low.index_of[name]]
+    return model_of(low.facts.props.get(name, {}), decl.class_name) in ASSET_INTERIORS
+
+
 def containers_rested_in(low: LoweringState, obj: ir.ObjectDecl) -> tuple[int, ...]:
-    """Indices of the containers the object is placed `on` (it rests on their floors)."""
+    """Indices of the containers the object is placed `on` (it rests on their floors): those
+    declaring an interior, and for `completely on` container assets too (specifiers.interior_of)."""
     found = []
     for spec in obj.specifiers:
-        if isinstance(spec, ir.On) and isinstance(spec.target, ir.ObjectRef) and declares_interior(low, spec.target.name):
-            found.append(low.index_of[spec.target.name])
+        if not (isinstance(spec, ir.On) and isinstance(spec.target, ir.ObjectRef)):
+            continue
+        name = spec.target.name
+        if declares_interior(low, name) or (spec.completely and is_container_asset(low, name)):
+            found.append(low.index_of[name])
     return tuple(sorted(set(found)))

@@ -119,3 +119,30 @@ def test_the_settle_check_needs_json_and_mjcf(tmp_path, capsys):
                  "--settle-check"]) == 2
     assert "--target json,mjcf" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_completely_on_a_container_asset_without_a_declared_interior_rests_on_its_floor(tmp_path, capsys):
+    """The original project's model library declares no interiors: `completely on` a class
+    built as the tray asset (here by the compat `model_name`) rests on the floor the backends
+    build; a bare `on` keeps the rim, and the settle check says the object falls in."""
+    (tmp_path / "model.prs").write_text(
+        "class Tray:\n    width: 0.2364\n    length: 0.4522\n    height: 0.028964\n    model_name: \"Tray\"\n\n"
+        "class Table:\n    width: 1.8\n    length: 0.8\n    height: 0.8\n    model_name: \"Table\"\n\n"
+        "class Cube:\n    width: 0.0468\n    length: 0.0468\n    height: 0.0468\n    color: \"red\"\n"
+    )
+    head = "from model import *\n\ntable = Table at Vector3D(0, 0, 0.4)\ntr = Tray completely on table\n"
+    inside, rim = tmp_path / "inside.prs", tmp_path / "rim.prs"
+    inside.write_text(head + "c = Cube completely on tr\n")
+    rim.write_text(head + "c = Cube on tr\n")
+    out = tmp_path / "out"
+    assert main(["compile", str(inside), "-t", "json,mjcf", "-n", "3", "-o", str(out), "--settle-check"]) == 0
+    assert "3 of 3 scenes at rest" in capsys.readouterr().out
+    for index in range(3):
+        model = mujoco.MjModel.from_xml_path(str(out / "inside" / "mjcf" / f"{index:05d}.xml"))
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        cube, floor = model.geom("c/box").id, model.geom("tr/floor").id
+        bottom = data.geom_xpos[cube][2] - model.geom_size[cube][2]
+        assert abs(bottom - (data.geom_xpos[floor][2] + model.geom_size[floor][2])) < 1e-6
+    assert main(["compile", str(rim), "-t", "json,mjcf", "-n", "2", "-o", str(out), "--settle-check"]) == 1
+    assert re.search(r"c moved [\d.]+ mm: placed on the rim of tr .* hollow: it falls in", capsys.readouterr().out)

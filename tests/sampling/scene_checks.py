@@ -411,7 +411,7 @@ def check_scene(program: ir.Program, scene: dict) -> SceneCheck:
         frozenset((decl.name, spec.target.name))
         for decl in program.objects for spec in decl.specifiers
         if isinstance(spec, ir.On) and isinstance(spec.target, ir.ObjectRef)
-        and container_interior(bodies[spec.target.name]) is not None
+        and container_interior(bodies[spec.target.name], spec.completely) is not None
     }
     items = list(bodies.values())
     for i, a in enumerate(items):
@@ -458,15 +458,37 @@ def _workspace(ev: Evaluator, workspace: ir.Expr, body: Body) -> str | None:
     return f"sticks out of the workspace by {out:.3g} m" if out > TOL else None
 
 
-def container_interior(target: Body) -> tuple[float, list[tuple[np.ndarray, float]]] | None:
-    """A declared container's floor top (above its centre) and interior edges (local normal, offset).
+def _clamp(value: float, low: float, high: float) -> float:
+    return max(low, min(high, value))
+
+
+# The container assets' own floors and walls (docs/backends.md, "Container assets"): the
+# interior `completely on` uses when the class declares none.
+ASSET_INTERIORS = {
+    "tray": lambda w, l, h: ("box", _clamp(0.2 * h, 0.005, 0.015), _clamp(0.04 * min(w, l), 0.003, 0.012)),
+    "bin": lambda w, l, h: ("box", _clamp(0.05 * h, 0.005, 0.015), _clamp(0.03 * min(w, l), 0.004, 0.015)),
+    "box": lambda w, l, h: ("box", *(_clamp(0.02 * min(w, l), 0.003, 0.01),) * 2),
+    "bowl": lambda w, l, h: ("round", max(0.15 * h, 0.002), max(0.06 * min(w, l) / 2, 0.002)),
+    "cup": lambda w, l, h: ("round", max(0.08 * h, 0.002), max(0.08 * min(w, l) / 2, 0.002)),
+    "bucket": lambda w, l, h: ("round", max(0.05 * h, 0.002), max(0.04 * min(w, l) / 2, 0.002)),
+    "plate": lambda w, l, h: ("round", max(0.4 * h, 0.002), max(0.05 * min(w, l) / 2, 0.002)),
+}
+
+
+def container_interior(target: Body, completely: bool = False) -> tuple[float, list[tuple[np.ndarray, float]]] | None:
+    """A container's floor top (above its centre) and interior edges (local normal, offset):
+    the declared one, or for `completely on` the container asset's own.
 
     Written from docs/language.md "Containers", apart from prsc's own code: floor at most
     half the height; walls at most a quarter of the short side, or 0.3 of a round one's
     radius, whose interior is the 16-gon of its wall slabs' inner faces."""
     props = target.data.get("properties", {})
     if "floorThickness" not in props:
-        return None
+        recipe = ASSET_INTERIORS.get(target.data.get("model") or "") if completely else None
+        if recipe is None:
+            return None
+        shape, floor, wall = recipe(*(float(v) for v in target.dims))
+        props = {"container": shape, "floorThickness": floor, "wallThickness": wall}
     w, l, h = (float(v) for v in target.dims)
     if props["container"] == "round":
         radius = min(w, l) / 2
@@ -481,7 +503,7 @@ def container_interior(target: Body) -> tuple[float, list[tuple[np.ndarray, floa
 
 def _on_floor(body: Body, target: Body, completely: bool) -> str | None:
     """`on X` for a container X: resting on its floor, centre (footprint) inside its walls."""
-    floor_top, edges = container_interior(target)  # type: ignore[misc]
+    floor_top, edges = container_interior(target, completely)  # type: ignore[misc]
     n = target.r[:, 2]
     gap = float(n @ (body.p - target.p)) - floor_top - body.s(n)
     if abs(gap) > TOL:
@@ -503,7 +525,7 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         return None
     if isinstance(spec, ir.On):
         target = ev.ev(spec.target)
-        if isinstance(target, Body) and container_interior(target) is not None:
+        if isinstance(target, Body) and container_interior(target, spec.completely) is not None:
             return _on_floor(body, target, spec.completely)
         if isinstance(target, Body):
             n, u, v = target.r[:, 2], target.r[:, 0], target.r[:, 1]
