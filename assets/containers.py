@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from prsc.assets.parts import Part, box
 from prsc.assets.vessel import vessel_parts
-from prsc.geometry.container import Interior, asset_interior
+from prsc.geometry.container import Interior
 
 
 def open_box_parts(interior: Interior) -> tuple[Part, ...]:
@@ -34,18 +34,3 @@ def open_box_parts(interior: Interior) -> tuple[Part, ...]:
 def container_parts(interior: Interior) -> tuple[Part, ...]:
     """The solids of a container with this interior (box or round)."""
     return vessel_parts(interior) if interior.shape == "round" else open_box_parts(interior)
-
-
-def tray_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A shallow tray with the tray asset's interior (prsc.geometry.container.ASSET_INTERIORS)."""
-    return open_box_parts(asset_interior("tray", dimensions))
-
-
-def bin_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A storage bin with the bin asset's interior."""
-    return open_box_parts(asset_interior("bin", dimensions))
-
-
-def box_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A cardboard-like open box with the box asset's interior."""
-    return open_box_parts(asset_interior("box", dimensions))

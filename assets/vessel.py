@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from prsc.assets.parts import Part, box, cylinder
-from prsc.geometry.container import ROUND_SIDES, Interior, asset_interior
+from prsc.geometry.container import ROUND_SIDES, Interior
 
 
 def vessel_parts(interior: Interior) -> tuple[Part, ...]:
@@ -32,23 +32,3 @@ def vessel_parts(interior: Interior) -> tuple[Part, ...]:
             box(f"wall_{k:02d}", (chord, wall, h), (apothem * math.cos(theta), apothem * math.sin(theta), 0.0), quat)
         )
     return tuple(parts)
-
-
-def bowl_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A bowl with the bowl asset's interior (prsc.geometry.container.ASSET_INTERIORS)."""
-    return vessel_parts(asset_interior("bowl", dimensions))
-
-
-def cup_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A cup with the cup asset's interior."""
-    return vessel_parts(asset_interior("cup", dimensions))
-
-
-def bucket_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A bucket with the bucket asset's interior."""
-    return vessel_parts(asset_interior("bucket", dimensions))
-
-
-def plate_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
-    """A plate with the plate asset's interior."""
-    return vessel_parts(asset_interior("plate", dimensions))

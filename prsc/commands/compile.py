@@ -264,8 +264,8 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     prepare_root(root, targets)
     lock = lock_folder(root)
     try:
-        return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, data, sources, scenes,
-                               sampler, width, created, meshes_anywhere, executor, proposal)
+        return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, hashlib.sha256(data).hexdigest(),
+                               sources.hexdigest(), scenes, sampler, width, created, meshes_anywhere, executor, proposal)
     except PrscError as error:
         raise _at_object(error, program) from None
     finally:
@@ -281,15 +281,13 @@ def _at_object(error: PrscError, program: Any) -> PrscError:
 
 
 def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int, jobs: int,
-                    include_dirs: Sequence[str], force: bool, data: bytes, sources: Any, scenes: list[dict] | None,
+                    include_dirs: Sequence[str], force: bool, digest: str, sources_digest: str, scenes: list[dict] | None,
                     sampler: Callable[[int], dict] | None, width: int, created: Path | None,
                     meshes_anywhere: bool, executor: Executor | None, proposal: dict | None = None) -> Path:
     """The part of compile_scenes that runs while this process holds the folder's lock."""
     from prsc.files import remove_stale_temporaries
 
     remove_stale_temporaries(root, recursive=True)
-    digest = hashlib.sha256(data).hexdigest()
-    sources_digest = sources.hexdigest()
     manifest, entries = load_manifest(root)
     if manifest is not None and (
         manifest.get("spec_sha256") != digest or manifest.get("sources_sha256") != sources_digest
@@ -304,7 +302,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
               include_dirs=tuple(include_dirs), sources=sources_digest, adopt_unlisted=manifest is not None,
               meshes_anywhere=meshes_anywhere, proposal=proposal, _sampler=sampler)
-    listed = Listed(root, {k: dict(v) for k, v in entries.items()})
+    listed = Listed({k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
         # Lazy: -n 10**12 neither builds a list nor checks a file before the first scene.

@@ -82,7 +82,7 @@ class Rule:
 
     def option(self, name: str, default: Any = None) -> Any:
         """The value of one option."""
-        return dict(self.options).get(name, default)
+        return next((value for key, value in self.options if key == name), default)
 
     @property
     def static(self) -> bool:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue
+from prsc.constraints.values import DIMENSIONS, ObjectValue, OrientedPoint, RegionValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.rotations import matrix_to_quat
 from prsc.ir.models import model_of
@@ -174,7 +174,7 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
     if static is None:
         static = is_camera or model in STATIC_MODELS
     w, l, h = obj.dims
-    for prop, value in zip(("width", "length", "height"), obj.dims):
+    for prop, value in zip(DIMENSIONS, obj.dims):
         problem = size_problem(float(value))
         if problem:
             raise PrscError(f"{prop} of {obj.name} {problem}")
@@ -231,7 +231,7 @@ def scene_json(
 
 def object_template(name: str, class_name: str, props: dict[str, Any], span: Span | None = None) -> dict[str, Any]:
     """Everything but the pose of an object whose properties are the same in every scene."""
-    dims = tuple(float(props[d]) for d in ("width", "length", "height"))
+    dims = tuple(float(props[d]) for d in DIMENSIONS)
     stand_in = ObjectValue(name, class_name, span, np.zeros(3), np.eye(3), dims, dict(props))  # type: ignore[arg-type]
     return object_json(stand_in)
 
