@@ -15,6 +15,7 @@ from typing import Sequence
 
 from prsc.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
+from prsc.mesh_paths import load_mesh
 
 
 def relative_path(target: Path | str, start: Path | str) -> str:
@@ -120,16 +121,8 @@ def _normalised_name(source: str, mtime_ns: int, size: int) -> str:
 def _normalise_mesh_obj(source: Path) -> bytes:
     """OBJ text of a mesh moved to its bounding-box centre and scaled per axis to size 1."""
     import numpy as np
-    import trimesh
 
-    try:
-        mesh = trimesh.load(str(source), force="mesh")
-    except Exception:  # trimesh raises many types for unreadable files
-        # Its message may quote the file (a token of a text file): say only what failed.
-        raise PrscError(f"cannot read mesh {source}: not a mesh file trimesh can load "
-                        "(STL, OBJ, PLY, OFF, GLB/GLTF, ...)") from None
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise PrscError(f"mesh {source} holds no triangles")
+    mesh = load_mesh(source)
     low, high = mesh.bounds
     extent = high - low
     if np.any(extent <= 0):

@@ -8,6 +8,7 @@ readable file into its outputs.
 from __future__ import annotations
 
 import os
+from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
@@ -40,5 +41,43 @@ def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False) -> Pa
             raise PrscError(f"mesh file {raw!r} is outside the spec's folder and the --include folders; "
                             "pass --meshes-anywhere to read it")
         return Path(candidate).resolve()
-    looked = ", ".join(candidates)
-    raise PrscError(f"mesh file {raw!r} not found (looked for {looked})")
+    if os.path.isabs(raw):
+        raise PrscError(f"mesh file {raw!r} not found")
+    spec_folder, *included = distinct_folders(folders)
+    searched = f"the spec's folder {spec_folder}"
+    if included:
+        searched += f" or the --include folder{'s' * (len(included) > 1)} {', '.join(included)}"
+    raise PrscError(f"mesh file {raw!r} not found in {searched}")
+
+
+def distinct_folders(folders: Sequence[str]) -> tuple[str, ...]:
+    """`folders` as absolute paths, each once, in order (`-I .` beside the spec adds nothing)."""
+    return tuple(dict.fromkeys(os.path.normpath(os.path.abspath(folder)) for folder in folders))
+
+
+def mesh_extent(path: Path | str) -> tuple[float, float, float]:
+    """The extent (x, y, z) of a mesh file's bounding box, in the file's units."""
+    stat = os.stat(path)
+    return _mesh_extent(str(path), stat.st_mtime_ns, stat.st_size)
+
+
+@lru_cache(maxsize=256)
+def _mesh_extent(path: str, mtime_ns: int, size: int) -> tuple[float, float, float]:
+    """Bounds of a mesh file (cached while the file is unchanged)."""
+    low, high = load_mesh(path).bounds
+    return tuple(float(v) for v in high - low)  # type: ignore[return-value]
+
+
+def load_mesh(path: Path | str):
+    """The triangles of a mesh file as a trimesh.Trimesh, or a PrscError saying why not."""
+    import trimesh
+
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception:  # trimesh raises many types for unreadable files
+        # Its message may quote the file (a token of a text file): say only what failed.
+        raise PrscError(f"cannot read mesh {path}: not a mesh file trimesh can load "
+                        "(STL, OBJ, PLY, OFF, GLB/GLTF, ...)") from None
+    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        raise PrscError(f"mesh {path} holds no triangles")
+    return mesh
