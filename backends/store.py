@@ -105,6 +105,20 @@ class AssetStore:
         return target
 
 
+    def convex_pieces(self, normalised: Path) -> tuple[Path, ...]:
+        """The store's copies of the convex pieces of a normalised mesh (decomposed once, cached)."""
+        from prsc.assets.convex_pieces import convex_pieces
+
+        pieces = convex_pieces(normalised)
+        target = self.root / "meshes" / "convex" / pieces[0].parent.name
+        copies = tuple(target / piece.name for piece in pieces)
+        if not all(copy.is_file() for copy in copies):
+            target.mkdir(parents=True, exist_ok=True)
+            for piece, copy in zip(pieces, copies):
+                atomic_copy(piece, copy)
+        return copies
+
+
 @lru_cache(maxsize=8)
 def _robot_usd_source(robot: str) -> Path:
     from prsc.assets.robot_usd import robot_usd_cached

@@ -14,6 +14,10 @@ from typing import Sequence
 
 from prsc.errors import PrscError
 
+MESH_COLLISIONS = ("hull", "decomposed")
+"""A mesh object's `collision`: its convex hull (every simulator's default), or the convex
+pieces of a CoACD decomposition (docs/backends.md, "Mesh collision")."""
+
 
 def _inside(path: str, folder: str) -> bool:
     """Whether `path` lies lexically inside `folder` (no `..` escape)."""

@@ -10,7 +10,8 @@ from typing import Sequence
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN
-from prsc.mesh_paths import mesh_extent, mesh_folders, resolve_mesh
+from prsc.ir.scope import did_you_mean
+from prsc.mesh_paths import MESH_COLLISIONS, mesh_extent, mesh_folders, resolve_mesh
 
 SIZES = ("width", "length", "height")
 
@@ -49,6 +50,10 @@ def _sized(obj: ir.ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ir.Obje
         props["shape"] = ir.Const(mesh.span, ir.Type.STRING, "mesh")
     elif not (isinstance(shape, ir.Const) and str(shape.value).strip().lower() == "mesh"):
         return obj  # another shape (or one drawn at random) was asked for: the mesh is not used
+    collision = props.get("collision")
+    if isinstance(collision, ir.Const) and str(collision.value).strip().lower() not in MESH_COLLISIONS:
+        raise PrscError(f"unknown collision {collision.value!r} for a mesh (one of {', '.join(MESH_COLLISIONS)})"
+                        f"{did_you_mean(str(collision.value), MESH_COLLISIONS)}", collision.span)
     names = _constant_strings(mesh)
     files = [_mesh_file(obj, raw, mesh, folders) for raw in names or ()]
     unset = [i for i, prop in enumerate(SIZES) if _builtin(props.get(prop))]

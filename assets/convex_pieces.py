@@ -1,0 +1,68 @@
+"""Convex decomposition of a concave mesh (CoACD), built once and cached in the build folder.
+
+Every simulator collides a mesh as its convex hull, so a cup's hull fills its opening. A
+mesh with `collision "decomposed"` collides as the union of convex pieces instead
+(docs/backends.md, "Mesh collision"). CoACD takes seconds to a minute per mesh, so pieces
+are cached under `$PRSC_BUILD_DIR/assets/convex/` keyed by the mesh's bytes, the CoACD
+version and its settings: later compiles, scenes and workers reuse them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+from prsc.assets.panda import build_dir
+from prsc.errors import PrscError
+
+SETTINGS = {"threshold": 0.05, "preprocess_mode": "auto", "max_convex_hull": -1, "seed": 0}
+"""CoACD's own defaults (concavity threshold 0.05 of the mesh size), with a fixed seed."""
+
+
+def _obj_text(vertices, faces) -> str:
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
+    return "\n".join(lines) + "\n"
+
+
+def _decompose(source: Path, folder: Path) -> None:
+    """Write the convex pieces of the mesh at `source` as `00.obj`, `01.obj`, ... in `folder`."""
+    import coacd
+    import numpy as np
+    import trimesh
+
+    mesh = trimesh.load(str(source), force="mesh")
+    coacd.set_log_level("error")
+    pieces = coacd.run_coacd(coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)), **SETTINGS)
+    if not pieces:
+        raise PrscError(f"the convex decomposition of mesh {source.name} found no pieces")
+    for k, (vertices, faces) in enumerate(pieces):
+        # Each piece as its own convex hull: consistent outward faces for every simulator.
+        hull = trimesh.Trimesh(np.asarray(vertices), np.asarray(faces)).convex_hull
+        (folder / f"{k:02d}.obj").write_text(_obj_text(hull.vertices, hull.faces))
+
+
+def convex_pieces(source: Path) -> tuple[Path, ...]:
+    """The convex pieces (OBJ files, in the mesh's own frame) of the mesh at `source`."""
+    from importlib.metadata import version
+
+    digest = hashlib.sha256(repr((version("coacd"), sorted(SETTINGS.items()))).encode())
+    digest.update(Path(source).read_bytes())
+    target = build_dir() / "convex" / f"{Path(source).stem}-{digest.hexdigest()[:12]}"
+    if not target.is_dir():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        # Built beside the target and renamed into place whole: a reader never sees half a
+        # set, and two workers decomposing at once keep the first complete set.
+        scratch = Path(tempfile.mkdtemp(prefix=".building-", dir=target.parent))
+        try:
+            _decompose(Path(source), scratch)
+            os.rename(scratch, target)
+        except OSError:
+            if not target.is_dir():
+                raise
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
+    return tuple(sorted(target.glob("*.obj")))
