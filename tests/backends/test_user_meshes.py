@@ -213,7 +213,7 @@ def test_sizes_come_from_the_mesh_bounds_times_scale_unless_given(tmp_path):
 
 
 def _check(spec: Path, *args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "prsc.cli", "check", str(spec), *args], capture_output=True,
+    return subprocess.run([sys.executable, "-m", "prsc.cli", "check", spec.name, *args], capture_output=True,
                           text=True, cwd=spec.parent, timeout=120)
 
 
@@ -225,7 +225,7 @@ def test_check_reports_a_missing_mesh_at_the_line_that_names_it_with_each_folder
     run = _check(spec, "-I", ".", "-I", "more")
     assert run.returncode == 2 and "Traceback" not in run.stderr
     first, source, caret = run.stderr.splitlines()[:3]
-    assert first.startswith(f"{spec.name}:2:48: error: mug: mesh file 'mugg.obj' not found"), first
+    assert first.startswith(f"{spec.name}:2:46: error: mug: mesh file 'mugg.obj' not found"), first
     assert source.strip() == 'mug = Object at Vector3D(1, 0, 1), with mesh "mugg.obj"'
     assert caret.strip() == "^" * len('"mugg.obj"') and caret.index("^") == source.index('"mugg.obj"')
     assert first.count(str(tmp_path)) == 2, "the spec's folder once (also given as -I .), then `more`"
@@ -238,7 +238,7 @@ def test_check_rejects_an_unknown_collision_at_its_value(tmp_path):
     spec.write_text('u = Object at Vector3D(0, 0, 1), with mesh "u.obj", with collision "decompose"\n')
     run = _check(spec)
     assert run.returncode == 2
-    assert "c.prs:1:67: error: unknown collision 'decompose' for a mesh (one of hull, decomposed); " \
+    assert "c.prs:1:68: error: unknown collision 'decompose' for a mesh (one of hull, decomposed); " \
            "did you mean 'decomposed'?" in run.stderr
 
 
