@@ -1,4 +1,5 @@
-"""Where a `with mesh "path"` file is found: the spec's folder and the --include folders only.
+"""Where a `with mesh "path"` file is found: the spec's folder, the --include folders, then
+prsc's model library (the repository's specs/, as for imports), and nowhere else.
 
 A path that is absolute or climbs out of those folders with `..` is read only when the
 user says so (`--meshes-anywhere`): a spec from elsewhere cannot make prsc copy any
@@ -25,9 +26,13 @@ def _inside(path: str, folder: str) -> bool:
     return os.path.normpath(os.path.abspath(path)).startswith(folder.rstrip(os.sep) + os.sep)
 
 
+LIBRARY = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "specs")
+"""prsc's model library (specs/ beside the package), searched last, as for imports."""
+
+
 def mesh_folders(spec: str, include_dirs: Sequence[str] = ()) -> tuple[str, ...]:
     """The folders meshes of `spec` are looked up in, in order."""
-    return (os.path.dirname(os.path.abspath(spec)), *include_dirs)
+    return (os.path.dirname(os.path.abspath(spec)), *include_dirs, LIBRARY)
 
 
 def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False) -> Path:
@@ -48,10 +53,16 @@ def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False) -> Pa
     if os.path.isabs(raw):
         raise PrscError(f"mesh file {raw!r} not found")
     spec_folder, *included = distinct_folders(folders)
-    searched = f"the spec's folder {spec_folder}"
+    searched = [f"the spec's folder {spec_folder}"]
+    library = os.path.normpath(LIBRARY)
+    if library in included:
+        included.remove(library)
     if included:
-        searched += f" or the --include folder{'s' * (len(included) > 1)} {', '.join(included)}"
-    raise PrscError(f"mesh file {raw!r} not found in {searched}")
+        searched.append(f"the --include folder{'s' * (len(included) > 1)} {', '.join(included)}")
+    if library != spec_folder:
+        searched.append(f"the model library {library}")
+    where = ", ".join(searched[:-1]) + " or " + searched[-1] if len(searched) > 1 else searched[0]
+    raise PrscError(f"mesh file {raw!r} not found in {where}")
 
 
 def distinct_folders(folders: Sequence[str]) -> tuple[str, ...]:

@@ -229,7 +229,8 @@ def test_check_reports_a_missing_mesh_at_the_line_that_names_it_with_each_folder
     assert source.strip() == 'mug = Object at Vector3D(1, 0, 1), with mesh "mugg.obj"'
     assert caret.strip() == "^" * len('"mugg.obj"') and caret.index("^") == source.index('"mugg.obj"')
     assert first.count(str(tmp_path)) == 2, "the spec's folder once (also given as -I .), then `more`"
-    assert first.endswith(f"the spec's folder {tmp_path} or the --include folder {extra}")
+    assert first.endswith(f"the spec's folder {tmp_path}, the --include folder {extra} "
+                          f"or the model library {REPO / 'specs'}")
 
 
 def test_check_rejects_an_unknown_collision_at_its_value(tmp_path):
