@@ -17,15 +17,10 @@ from pathlib import Path
 
 from prsc.assets.panda import build_dir
 from prsc.errors import PrscError
+from prsc.mesh_paths import obj_text
 
 SETTINGS = {"threshold": 0.05, "preprocess_mode": "auto", "max_convex_hull": -1, "seed": 0}
 """CoACD's own defaults (concavity threshold 0.05 of the mesh size), with a fixed seed."""
-
-
-def _obj_text(vertices, faces) -> str:
-    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
-    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
-    return "\n".join(lines) + "\n"
 
 
 def _decompose(source: Path, folder: Path) -> None:
@@ -42,7 +37,7 @@ def _decompose(source: Path, folder: Path) -> None:
     for k, (vertices, faces) in enumerate(pieces):
         # Each piece as its own convex hull: consistent outward faces for every simulator.
         hull = trimesh.Trimesh(np.asarray(vertices), np.asarray(faces)).convex_hull
-        (folder / f"{k:02d}.obj").write_text(_obj_text(hull.vertices, hull.faces))
+        (folder / f"{k:02d}.obj").write_text(obj_text(hull.vertices, hull.faces))
 
 
 def convex_pieces(source: Path) -> tuple[Path, ...]:

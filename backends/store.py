@@ -15,7 +15,7 @@ from typing import Sequence
 
 from prsc.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
-from prsc.mesh_paths import load_mesh
+from prsc.mesh_paths import load_mesh, obj_text
 
 
 def relative_path(target: Path | str, start: Path | str) -> str:
@@ -142,7 +142,5 @@ def _normalise_mesh_obj(source: Path) -> bytes:
     if np.any(extent <= 0):
         raise PrscError(f"mesh {source} is flat (bounding box {extent.tolist()}); it cannot fill a box")
     vertices = (mesh.vertices - (low + high) / 2) / extent
-    lines = ["# prsc: normalised to a unit cube centred at the origin", f"# source: {source.name}"]
-    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
-    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces.tolist()]
-    return ("\n".join(lines) + "\n").encode()
+    comments = ("prsc: normalised to a unit cube centred at the origin", f"source: {source.name}")
+    return obj_text(vertices, mesh.faces, comments).encode()

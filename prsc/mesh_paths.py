@@ -83,6 +83,13 @@ def _mesh_extent(path: str, mtime_ns: int, size: int) -> tuple[float, float, flo
     return tuple(float(v) for v in high - low)  # type: ignore[return-value]
 
 
+def obj_text(vertices, faces, comments: Sequence[str] = ()) -> str:
+    """A triangle mesh as OBJ text (vertices with full precision, 1-based faces)."""
+    lines = [f"# {c}" for c in comments] + [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
+    return "\n".join(lines) + "\n"
+
+
 def load_mesh(path: Path | str):
     """The triangles of a mesh file as a trimesh.Trimesh, or a PrscError saying why not."""
     import trimesh

@@ -358,7 +358,7 @@ def compile_program(path: str, include_dirs: Sequence[str] = ()) -> ir.Program:
     try:
         graph = load_module_graph(path, include_dirs)
         program = with_mesh_sizes(Compiler(graph).run(), include_dirs)
-        check_values(program, include_dirs)
+        check_values(program)
         return program
     except RecursionError:
         raise PrscError("the spec is nested too deeply to compile", Span(path, 1, 1, 1, 1)) from None

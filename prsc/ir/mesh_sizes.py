@@ -10,10 +10,9 @@ from typing import Sequence
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN
+from prsc.ir.checks import SIZES
 from prsc.ir.scope import did_you_mean
 from prsc.mesh_paths import MESH_COLLISIONS, mesh_extent, mesh_folders, resolve_mesh
-
-SIZES = ("width", "length", "height")
 
 
 def _builtin(expr: ir.Expr | None) -> bool:
