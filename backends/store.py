@@ -104,7 +104,6 @@ class AssetStore:
             atomic_write(target, _normalise_mesh_obj(Path(source)))
         return target
 
-
     def convex_pieces(self, normalised: Path) -> tuple[Path, ...]:
         """The store's copies of the convex pieces of a normalised mesh (decomposed once, cached)."""
         from prsc.assets.convex_pieces import convex_pieces
