@@ -10,21 +10,19 @@ version and its settings: later compiles, scenes and workers reuse them.
 from __future__ import annotations
 
 import hashlib
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 from prsc.assets.panda import build_dir
 from prsc.errors import PrscError
+from prsc.files import atomic_write_tree
 from prsc.mesh_paths import obj_text
 
 SETTINGS = {"threshold": 0.05, "preprocess_mode": "auto", "max_convex_hull": -1, "seed": 0}
 """CoACD's own defaults (concavity threshold 0.05 of the mesh size), with a fixed seed."""
 
 
-def _decompose(source: Path, folder: Path) -> None:
-    """Write the convex pieces of the mesh at `source` as `00.obj`, `01.obj`, ... in `folder`."""
+def _decompose(source: Path) -> dict[str, str]:
+    """The convex pieces of the mesh at `source`: OBJ text by file name (`00.obj`, `01.obj`, ...)."""
     import coacd
     import numpy as np
     import trimesh
@@ -34,10 +32,12 @@ def _decompose(source: Path, folder: Path) -> None:
     pieces = coacd.run_coacd(coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)), **SETTINGS)
     if not pieces:
         raise PrscError(f"the convex decomposition of mesh {source.name} found no pieces")
+    files = {}
     for k, (vertices, faces) in enumerate(pieces):
         # Each piece as its own convex hull: consistent outward faces for every simulator.
         hull = trimesh.Trimesh(np.asarray(vertices), np.asarray(faces)).convex_hull
-        (folder / f"{k:02d}.obj").write_text(obj_text(hull.vertices, hull.faces))
+        files[f"{k:02d}.obj"] = obj_text(hull.vertices, hull.faces)
+    return files
 
 
 def convex_pieces(source: Path) -> tuple[Path, ...]:
@@ -48,16 +48,9 @@ def convex_pieces(source: Path) -> tuple[Path, ...]:
     digest.update(Path(source).read_bytes())
     target = build_dir() / "convex" / f"{Path(source).stem}-{digest.hexdigest()[:12]}"
     if not target.is_dir():
-        target.parent.mkdir(parents=True, exist_ok=True)
-        # Built beside the target and renamed into place whole: a reader never sees half a
-        # set, and two workers decomposing at once keep the first complete set.
-        scratch = Path(tempfile.mkdtemp(prefix=".building-", dir=target.parent))
-        try:
-            _decompose(Path(source), scratch)
-            os.rename(scratch, target)
-        except OSError:
-            if not target.is_dir():
-                raise
-        finally:
-            shutil.rmtree(scratch, ignore_errors=True)
+        files = _decompose(Path(source))
+        if not target.is_dir():  # another worker may have finished first: keep its set
+            target.parent.mkdir(parents=True, exist_ok=True)
+            # The whole set is renamed into place at once: a reader never sees half of it.
+            atomic_write_tree(target, files)
     return tuple(sorted(target.glob("*.obj")))
