@@ -39,11 +39,8 @@ def _u_mesh(path: Path) -> Path:
 
 @pytest.fixture(scope="module")
 def build_dir(tmp_path_factory):
-    """A fresh decomposition cache for this module (the user's build folder stays untouched)."""
-    folder = tmp_path_factory.mktemp("build")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("PRSC_BUILD_DIR", str(folder))
-        yield folder
+    """A fresh decomposition cache for the U tests (PRSC_BUILD_DIR while they compile)."""
+    return tmp_path_factory.mktemp("build")
 
 
 def _cup_scene(folder: Path, collision: str) -> Path:
@@ -63,8 +60,10 @@ def compiled(build_dir, tmp_path_factory):
     from prsc.commands.compile import compile_scenes
 
     folder = tmp_path_factory.mktemp("u")
-    return {c: compile_scenes(str(_cup_scene(folder, c)), TARGETS, 1, 0, str(folder / "out"))
-            for c in ("decomposed", "hull")}
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("PRSC_BUILD_DIR", str(build_dir))
+        return {c: compile_scenes(str(_cup_scene(folder, c)), TARGETS, 1, 0, str(folder / "out"))
+                for c in ("decomposed", "hull")}
 
 
 def _pieces(root: Path) -> list[Path]:
@@ -84,6 +83,7 @@ def test_a_concave_mesh_decomposes_into_several_convex_pieces_cached_in_the_buil
     import coacd
 
     monkeypatch.setattr(coacd, "run_coacd", lambda *a, **k: pytest.fail("decomposed twice"))
+    monkeypatch.setenv("PRSC_BUILD_DIR", str(build_dir))
     source = next((compiled["decomposed"] / "assets" / "meshes").glob("u-*.obj"))
     cached = convex_pieces(source)
     assert [p.read_bytes() for p in cached] == [p.read_bytes() for p in pieces]
