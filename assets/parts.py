@@ -24,6 +24,7 @@ class Part:
     quaternion: tuple[float, float, float, float] = IDENTITY  # w x y z
     collides: bool = True
     mesh: str | None = None  # normalised mesh file (absolute path) for shape "mesh"
+    visible: bool = True  # False: collision geometry only (a convex piece of a decomposed mesh)
 
     @property
     def radius(self) -> float:

@@ -16,7 +16,7 @@ from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior, declared_interior
-from prsc.mesh_paths import mesh_folders, resolve_mesh
+from prsc.mesh_paths import MESH_COLLISIONS, mesh_folders, resolve_mesh
 
 CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
 """Rotation (w x y z, object frame) of a camera that looks along its local -Z with +Y up
@@ -104,11 +104,20 @@ def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part
     if obj.shape == "sphere":
         return (sphere("sphere", min(obj.dimensions) / 2),)
     source = resolve_mesh_source(obj, scene, store)
+    collision = str(obj.properties.get("collision", "hull")).strip().lower()
     try:
+        if collision not in MESH_COLLISIONS:
+            raise PrscError(f"collision {obj.properties['collision']!r} is not one of {', '.join(MESH_COLLISIONS)}")
         mesh = store.normalised_mesh(source)
+        if collision == "hull":
+            return (Part("mesh", "mesh", obj.dimensions, mesh=str(mesh)),)
+        pieces = store.convex_pieces(mesh)
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
-    return (Part("mesh", "mesh", obj.dimensions, mesh=str(mesh)),)
+    # The mesh is seen; its convex pieces (in the same unit-cube frame, so the same scale)
+    # collide and are not drawn.
+    return (Part("mesh", "mesh", obj.dimensions, collides=False, mesh=str(mesh)),
+            *(Part(f"piece{k:02d}", "mesh", obj.dimensions, mesh=str(p), visible=False) for k, p in enumerate(pieces)))
 
 
 def object_interior(obj: SceneObject) -> Interior | None:

@@ -74,10 +74,13 @@ def _unit_second_moment(part: Part) -> tuple[float, np.ndarray, np.ndarray]:
 @functools.lru_cache(maxsize=4096)
 def composite_inertial(parts: tuple[Part, ...], mass: float) -> Inertial:
     """Mass properties of rigidly joined parts sharing `mass` in proportion to volume."""
-    if not parts:
-        raise ValueError("a body needs at least one part")
+    # Collision-only parts (convex pieces of a decomposed mesh) overlap the visible solid
+    # they approximate: the mass lies in what is seen.
+    solids = [part for part in parts if part.visible]
+    if not solids:
+        raise ValueError("a body needs at least one visible part")
     volumes, centroids, seconds = [], [], []
-    for part in parts:
+    for part in solids:
         v, c, s = _unit_second_moment(part)
         rot = quat_to_matrix(part.quaternion)
         pos = np.asarray(part.position, dtype=float)

@@ -34,6 +34,7 @@ from prsc.errors import PrscError
 
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling
 SOLREF = (0.01, 1.0)  # stiffer than the default 0.02 so resting objects sink < 1 mm
+COLLISION_GROUP = 3  # collision-only geoms: MuJoCo's viewer and renderer hide group 3 by default
 CONDIM_FREE = 4  # torsional friction: a held or resting object does not spin in place
 SECTION_ORDER = (
     "compiler", "option", "size", "visual", "statistic", "default", "asset", "worldbody",
@@ -206,6 +207,8 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
                 kwargs["size"] = list(_geom_size(part))
             if not part.collides:
                 kwargs.update(contype=0, conaffinity=0)
+            if not part.visible:
+                kwargs["group"] = COLLISION_GROUP
             b.add_geom(**kwargs)
             stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(obj.color)}
             if part.shape != "mesh":

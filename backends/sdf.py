@@ -105,6 +105,8 @@ def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
             _pose(collision, part.position, part.quaternion)
             _part_geometry(collision, part, folder)
             _surface(collision)
+        if not part.visible:
+            continue
         visual = ET.SubElement(link, "visual", name=f"{part.name}_visual")
         _pose(visual, part.position, part.quaternion)
         _part_geometry(visual, part, folder)

@@ -15,6 +15,7 @@ from typing import Sequence
 
 from prsc.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
+from prsc.mesh_paths import load_mesh, obj_text
 
 
 def relative_path(target: Path | str, start: Path | str) -> str:
@@ -103,6 +104,19 @@ class AssetStore:
             atomic_write(target, _normalise_mesh_obj(Path(source)))
         return target
 
+    def convex_pieces(self, normalised: Path) -> tuple[Path, ...]:
+        """The store's copies of the convex pieces of a normalised mesh (decomposed once, cached)."""
+        from prsc.assets.convex_pieces import convex_pieces
+
+        pieces = convex_pieces(normalised)
+        target = self.root / "meshes" / "convex" / pieces[0].parent.name
+        copies = tuple(target / piece.name for piece in pieces)
+        if not all(copy.is_file() for copy in copies):
+            target.mkdir(parents=True, exist_ok=True)
+            for piece, copy in zip(pieces, copies):
+                atomic_copy(piece, copy)
+        return copies
+
 
 @lru_cache(maxsize=8)
 def _robot_usd_source(robot: str) -> Path:
@@ -120,22 +134,12 @@ def _normalised_name(source: str, mtime_ns: int, size: int) -> str:
 def _normalise_mesh_obj(source: Path) -> bytes:
     """OBJ text of a mesh moved to its bounding-box centre and scaled per axis to size 1."""
     import numpy as np
-    import trimesh
 
-    try:
-        mesh = trimesh.load(str(source), force="mesh")
-    except Exception:  # trimesh raises many types for unreadable files
-        # Its message may quote the file (a token of a text file): say only what failed.
-        raise PrscError(f"cannot read mesh {source}: not a mesh file trimesh can load "
-                        "(STL, OBJ, PLY, OFF, GLB/GLTF, ...)") from None
-    if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-        raise PrscError(f"mesh {source} holds no triangles")
+    mesh = load_mesh(source)
     low, high = mesh.bounds
     extent = high - low
     if np.any(extent <= 0):
         raise PrscError(f"mesh {source} is flat (bounding box {extent.tolist()}); it cannot fill a box")
     vertices = (mesh.vertices - (low + high) / 2) / extent
-    lines = ["# prsc: normalised to a unit cube centred at the origin", f"# source: {source.name}"]
-    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
-    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in mesh.faces.tolist()]
-    return ("\n".join(lines) + "\n").encode()
+    comments = ("prsc: normalised to a unit cube centred at the origin", f"source: {source.name}")
+    return obj_text(vertices, mesh.faces, comments).encode()

@@ -70,7 +70,7 @@ def _parts_urdf(body: Body, folder: Path) -> ET.Element:
     ET.SubElement(material, "color", rgba=nums(obj.color))
     link = ET.SubElement(robot, "link", name=obj.name)
     _inertial(link, body.inertial)
-    for part in body.parts:
+    for part in (p for p in body.parts if p.visible):
         visual = ET.SubElement(link, "visual", name=part.name)
         _origin(visual, part.position, part.quaternion)
         _geometry(visual, part, folder)

@@ -48,8 +48,9 @@ def _color(gprim, rgba) -> None:
     gprim.CreateDisplayOpacityAttr([float(rgba[3])])
 
 
-def _part_prim(stage, path: str, part, folder: Path, rgba):
-    """A gprim for one part, placed and sized in its body's frame."""
+def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tuple[str, str]]):
+    """A gprim for one part, placed and sized in its body's frame (a mesh's reference to its
+    layer is appended to `references`, authored once the stage is closed)."""
     from pxr import Gf, UsdGeom, UsdPhysics
 
     if part.shape == "box":
@@ -73,12 +74,14 @@ def _part_prim(stage, path: str, part, folder: Path, rgba):
         scale = None
     else:
         gprim = UsdGeom.Mesh.Define(stage, path)
-        gprim.GetPrim().GetReferences().AddReference(relative_path(_mesh_usd(part.mesh), folder))
+        references.append((path, relative_path(_mesh_usd(part.mesh), folder)))
         scale = part.size
     _pose(gprim, part.position, part.quaternion)
     if scale is not None:
         gprim.AddScaleOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*(float(s) for s in scale)))
     _color(gprim, rgba)
+    if not part.visible:
+        gprim.CreatePurposeAttr(UsdGeom.Tokens.guide)  # collision only: renderers skip guides
     if part.collides:
         UsdPhysics.CollisionAPI.Apply(gprim.GetPrim())
         if part.shape == "mesh":
@@ -112,7 +115,7 @@ def _mesh_usd(obj_path: str) -> Path:
     return target
 
 
-def _rigid_body(stage, body: Body, folder: Path) -> None:
+def _rigid_body(stage, body: Body, folder: Path, references: list[tuple[str, str]]) -> None:
     from pxr import Gf, UsdGeom, UsdPhysics
 
     obj = body.obj
@@ -132,7 +135,7 @@ def _rigid_body(stage, body: Body, folder: Path) -> None:
         w, x, y, z = inertial.principal
         mass.CreatePrincipalAxesAttr(Gf.Quatf(w, Gf.Vec3f(x, y, z)))
     for part in body.parts:
-        _part_prim(stage, f"{path}/{part.name}", part, folder, obj.color)
+        _part_prim(stage, f"{path}/{part.name}", part, folder, obj.color, references)
     if body.camera is not None:
         cam = body.camera
         camera = UsdGeom.Camera.Define(stage, f"{path}/camera")
@@ -201,6 +204,7 @@ def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:
     layer = Sdf.Layer.CreateAnonymous(".usda")
     stage = Usd.Stage.Open(layer, Usd.Stage.LoadNone)
     names = {b.name for b in bodies}
+    references: list[tuple[str, str]] = []  # (prim, layer relative to the output file)
 
     def free_name(name: str) -> str:
         while name in names:
@@ -229,12 +233,17 @@ def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:
         if body.robot is not None:
             _robot_mount(stage, body)
         else:
-            _rigid_body(stage, body, folder)
+            _rigid_body(stage, body, folder, references)
+    # References go onto the bare layer after the stage is gone: an open stage would
+    # compose them at once against the in-memory layer, which has no folder, and pxr
+    # would warn "Could not open asset" for every relative path that is fine on disk.
     del stage
     # Convert robot assets before the change block: building one opens a stage of its own,
     # and no stage can define prims while a change block is open.
     assets = {b.robot: store.robot_usd(b.robot) for b in bodies if b.robot is not None}
     with Sdf.ChangeBlock():
+        for prim, asset in references:
+            layer.GetPrimAtPath(prim).referenceList.Prepend(Sdf.Reference(asset))
         for body in bodies:
             if body.robot is not None:
                 _robot_reference(layer, body, assets[body.robot], folder)

@@ -1,10 +1,13 @@
 """`prsc preview`: a contact sheet of sampled scenes, rendered offscreen with MuJoCo.
 
-    prsc preview FILE -n 16 -o sheet.png [--seed S] [-I DIR]
+    prsc preview FILE -n 16 -o sheet.png [--seed S] [-I DIR] [--view top|front|iso | --camera NAME]
 
-Each scene is compiled to MJCF in a temporary folder and rendered from the same oblique
-viewpoint framing the scene's objects, so the sheet shows the spread of the distribution
-at a glance. FILE is a .prs spec or scene JSON (.json / .jsonl).
+Each scene is compiled to MJCF in a temporary folder and rendered from the same viewpoint,
+so the sheet shows the spread of the distribution at a glance. --view picks a standard
+view framing the scene's objects: iso (default: from the front right, 30 degrees down),
+top (straight down, +y up in the image) or front (level, looking along +y). --camera NAME
+renders what the spec's camera object NAME sees (its fovy and aspect ratio). FILE is a
+.prs spec or scene JSON (.json / .jsonl).
 """
 
 from __future__ import annotations
@@ -22,6 +25,9 @@ from prsc.commands.outputs import output_file, write_error
 from prsc.errors import PrscError
 
 TILE = (320, 240)  # width, height of one scene's image
+VIEWS = {"iso": (-60.0, -30.0), "top": (90.0, -90.0), "front": (90.0, 0.0)}
+"""Standard views: (azimuth, elevation) of MuJoCo's free camera in degrees; azimuth 90
+looks along +y, elevation -90 looks straight down."""
 
 
 def add_parser(subparsers: Any) -> None:
@@ -33,6 +39,9 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("-o", "--output", default="sheet.png", help="output image (default sheet.png)")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--view", choices=sorted(VIEWS), default="iso", help="standard view (default iso)")
+    where.add_argument("--camera", metavar="NAME", help="render from the spec's camera object NAME")
 
 
 def _scenes(file: str, n: int, seed: int, include_dirs: Sequence[str] = ()) -> list[dict]:
@@ -63,8 +72,25 @@ def _framing(scene: dict) -> tuple[np.ndarray, float]:
     return (low + high) / 2, max(float(np.linalg.norm(high - low)) / 2, 0.3)
 
 
-def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE) -> np.ndarray:
-    """An RGB image (height, width, 3) of one scene from an oblique overview camera."""
+def camera_object(scene: dict, name: str) -> dict:
+    """The camera object `name` of a scene, or a PrscError listing the scene's cameras."""
+    from prsc.ir.scope import did_you_mean
+
+    cameras = [o["name"] for o in scene["objects"] if o.get("camera")]
+    for o in scene["objects"]:
+        if o["name"] == name and o.get("camera"):
+            return o
+    if any(o["name"] == name for o in scene["objects"]):
+        raise PrscError(f"--camera {name}: object {name!r} is not a camera (a camera object has `camera True`, "
+                        "e.g. class Camera of the model library)")
+    known = f"its cameras are {', '.join(cameras)}" if cameras else "it has no camera objects"
+    raise PrscError(f"--camera {name}: scene {scene.get('index', 0)} has no object {name!r}; {known}"
+                    f"{did_you_mean(name, cameras)}")
+
+
+def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: str = "iso",
+                 camera_name: str | None = None) -> np.ndarray:
+    """An RGB image (height, width, 3) of one scene from a standard view or a camera object."""
     import mujoco
 
     from prsc.backends.mjcf import render
@@ -79,14 +105,17 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE) -> np.
     if model.nkey:
         mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
     mujoco.mj_forward(model, data)
-    centre, radius = _framing(scene)
-    camera = mujoco.MjvCamera()
-    camera.type = mujoco.mjtCamera.mjCAMERA_FREE
-    camera.lookat[:] = centre
-    # The objects' bounding sphere nearly fills MuJoCo's default 45 degree field of view.
-    camera.distance = 0.8 * radius / math.sin(math.radians(45) / 2)
-    camera.azimuth = -60.0  # from the front right, looking back along +y
-    camera.elevation = -30.0
+    if camera_name is not None:
+        # The backends name an object's camera after the object (it looks along its +y).
+        camera: Any = camera_name
+    else:
+        centre, radius = _framing(scene)
+        camera = mujoco.MjvCamera()
+        camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+        camera.lookat[:] = centre
+        # The objects' bounding sphere nearly fills MuJoCo's default 45 degree field of view.
+        camera.distance = 0.8 * radius / math.sin(math.radians(45) / 2)
+        camera.azimuth, camera.elevation = VIEWS[view]
     width, height = size
     model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
     model.vis.global_.offheight = max(model.vis.global_.offheight, height)
@@ -119,17 +148,25 @@ def contact_sheet(images: list[np.ndarray], labels: list[str], output: Path) -> 
     plt.close(figure)
 
 
-def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[str] = ()) -> Path:
-    """Render `n` scenes of `file` into a contact sheet PNG at `output`."""
+def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[str] = (), view: str = "iso",
+            camera: str | None = None) -> Path:
+    """Render `n` scenes of `file` from `view` (or the camera object `camera`) into a contact sheet PNG."""
     if n < 1:
         raise PrscError(f"-n must be >= 1, got {n}")
     if Path(output).suffix.lower() != ".png":
         raise PrscError(f"the contact sheet is a PNG: {output} should end in .png")
     out = output_file(output)
     os.environ.setdefault("MUJOCO_GL", "egl")
+    if view not in VIEWS:
+        raise PrscError(f"unknown view {view!r} (one of {', '.join(sorted(VIEWS))})")
     scenes = _scenes(file, n, seed, include_dirs)
+    sizes = [TILE] * len(scenes)
+    if camera is not None:
+        # Every scene is checked before any is rendered; tiles keep the camera's aspect ratio.
+        resolutions = [camera_object(scene, camera)["camera"]["resolution"] for scene in scenes]
+        sizes = [(TILE[0], max(1, round(TILE[0] * h / w))) for w, h in resolutions]
     with tempfile.TemporaryDirectory(prefix="prsc-preview-") as tmp:
-        images = [render_scene(scene, Path(tmp)) for scene in scenes]
+        images = [render_scene(scene, Path(tmp), size, view, camera) for scene, size in zip(scenes, sizes)]
     labels = [f"scene {s.get('index', k)}" for k, s in enumerate(scenes)]
     import io
 
@@ -146,5 +183,5 @@ def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[st
 
 def run(args: argparse.Namespace) -> int:
     """Entry point of `prsc preview`."""
-    preview(args.file, args.scenes, args.seed, args.output, args.include)
+    preview(args.file, args.scenes, args.seed, args.output, args.include, args.view, args.camera)
     return 0

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 
+from prsc.errors import Span
 from prsc.ir.model import Type
 
 ROOT_CLASS = "Object"
+BUILTIN_SPAN = Span("<builtin Object>", 1, 1, 1, 1)  # where Object's defaults are "written"
 
 # Built-in properties and the static types a value for them may have.
 PROPERTY_TYPES: dict[str, frozenset[Type]] = {
@@ -21,6 +23,8 @@ PROPERTY_TYPES: dict[str, frozenset[Type]] = {
     "mass": frozenset({Type.SCALAR}),
     "shape": frozenset({Type.STRING}),
     "mesh": frozenset({Type.STRING}),
+    "scale": frozenset({Type.SCALAR}),  # mesh file units -> metres, for sizes taken from the mesh
+    "collision": frozenset({Type.STRING}),  # a mesh's collision geometry: "hull" or "decomposed"
     "model": frozenset({Type.STRING}),
     "camera": frozenset({Type.BOOL}),
     "fovy": frozenset({Type.SCALAR}),

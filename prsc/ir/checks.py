@@ -1,14 +1,11 @@
 """Checks on a Program's constant values that `prsc check` can make before any sampling:
-sizes a simulator can represent, and mesh files that exist."""
+sizes and masses a simulator can represent (mesh files are found by prsc/ir/mesh_sizes.py)."""
 
 from __future__ import annotations
-
-from typing import Sequence
 
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.limits import mass_problem, size_problem
-from prsc.mesh_paths import mesh_folders, resolve_mesh
 
 SIZES = ("width", "length", "height")
 
@@ -31,15 +28,8 @@ def constant_number(expr: ir.Expr) -> float | None:
     return None
 
 
-def _constant_string(expr: ir.Expr | None) -> str | None:
-    if isinstance(expr, ir.Const) and expr.type == ir.Type.STRING:
-        return str(expr.value)
-    return None
-
-
-def check_values(program: ir.Program, include_dirs: Sequence[str] = ()) -> None:
-    """Raise a PrscError at the value's place for a constant size or mass a simulator cannot
-    hold, or a constant mesh file that cannot be found."""
+def check_values(program: ir.Program) -> None:
+    """Raise a PrscError at the value's place for a constant size or mass a simulator cannot hold."""
     for obj in program.objects:
         for prop in SIZES:
             expr = obj.prop(prop)
@@ -52,12 +42,3 @@ def check_values(program: ir.Program, include_dirs: Sequence[str] = ()) -> None:
         problem = None if value is None else mass_problem(value)
         if problem:
             raise PrscError(f"mass of {obj.name} {problem}", mass.span)  # type: ignore[union-attr]
-        mesh = obj.prop("mesh")
-        raw = _constant_string(mesh)
-        if raw is not None and (_constant_string(obj.prop("shape")) or "").strip().lower() == "mesh":
-            try:
-                # Existence only: whether a path outside the spec's folders may be read is
-                # the compiling command's decision (--meshes-anywhere).
-                resolve_mesh(raw, mesh_folders(program.path, include_dirs), anywhere=True)
-            except PrscError as error:
-                raise PrscError(f"{obj.name}: {error.message}", mesh.span) from None  # type: ignore[union-attr]

@@ -7,10 +7,12 @@ from typing import Sequence
 
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
-from prsc.ir.builtins import MATH_CONSTANTS, OBJECT_DEFAULTS, PROPERTY_TYPES, ROOT_CLASS, SPECIFIER_PROPERTIES
+from prsc.ir.builtins import (BUILTIN_SPAN, MATH_CONSTANTS, OBJECT_DEFAULTS, PROPERTY_TYPES, ROOT_CLASS,
+                              SPECIFIER_PROPERTIES)
 from prsc.ir.checks import check_values, constant_number
 from prsc.ir.expressions import DrawIds, ExprResolver, article, type_words
 from prsc.ir.imports import MATH, ModuleGraph, load_module_graph
+from prsc.ir.mesh_sizes import with_mesh_sizes
 from prsc.ir.order import order_properties, order_specifiers
 from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule, VariableInfo,
                            describe, did_you_mean)
@@ -19,7 +21,6 @@ from prsc.ir.walk import rebuild, referenced_objects, referenced_variables, spec
 from prsc.syntax import nodes
 
 T = ir.Type
-BUILTIN_SPAN = Span("<builtin Object>", 1, 1, 1, 1)
 
 
 def _root_class() -> ClassInfo:
@@ -356,8 +357,8 @@ def compile_program(path: str, include_dirs: Sequence[str] = ()) -> ir.Program:
     path = os.fspath(path)
     try:
         graph = load_module_graph(path, include_dirs)
-        program = Compiler(graph).run()
-        check_values(program, include_dirs)
+        program = with_mesh_sizes(Compiler(graph).run(), include_dirs)
+        check_values(program)
         return program
     except RecursionError:
         raise PrscError("the spec is nested too deeply to compile", Span(path, 1, 1, 1, 1)) from None

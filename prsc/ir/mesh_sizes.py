@@ -1,0 +1,80 @@
+"""Mesh objects as users bring them: `with mesh` implies the mesh shape, and the sizes the
+spec leaves unset come from the mesh file's own bounds times `scale` (docs/language.md,
+"Meshes as you bring them")."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Sequence
+
+from prsc.errors import PrscError
+from prsc.ir import model as ir
+from prsc.ir.builtins import BUILTIN_SPAN
+from prsc.ir.checks import SIZES
+from prsc.ir.scope import did_you_mean
+from prsc.mesh_paths import MESH_COLLISIONS, mesh_extent, mesh_folders, resolve_mesh
+
+
+def _builtin(expr: ir.Expr | None) -> bool:
+    """Whether a property still holds Object's built-in default (nothing in the spec set it)."""
+    return expr is not None and expr.span.path == BUILTIN_SPAN.path
+
+
+def _constant_strings(expr: ir.Expr) -> tuple[str, ...] | None:
+    """The file names a mesh expression can take when all are constants, else None."""
+    if isinstance(expr, ir.Const) and expr.type == ir.Type.STRING:
+        return (str(expr.value),)
+    if isinstance(expr, ir.Distribution) and expr.kind in ("uniform", "discrete"):
+        items = expr.args[0].items if len(expr.args) == 1 and isinstance(expr.args[0], ir.ListExpr) else expr.args
+        if all(isinstance(a, ir.Const) and a.type == ir.Type.STRING for a in items):
+            return tuple(str(a.value) for a in items)  # type: ignore[union-attr]
+    return None
+
+
+def _mesh_file(obj: ir.ObjectDecl, raw: str, mesh: ir.Expr, folders: Sequence[str]):
+    """The mesh file `raw` names, or an error at the expression that names it."""
+    try:
+        # Existence only: whether a path outside the spec's folders may be read is the
+        # compiling command's decision (--meshes-anywhere).
+        return resolve_mesh(raw, folders, anywhere=True)
+    except PrscError as error:
+        raise PrscError(f"{obj.name}: {error.message}", mesh.span) from None
+
+
+def _sized(obj: ir.ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ir.ObjectDecl:
+    """`obj` with the mesh shape and the unset sizes taken from its mesh file."""
+    props = dict(obj.properties)
+    shape = props.get("shape")
+    if _builtin(shape):
+        props["shape"] = ir.Const(mesh.span, ir.Type.STRING, "mesh")
+    elif not (isinstance(shape, ir.Const) and str(shape.value).strip().lower() == "mesh"):
+        return obj  # another shape (or one drawn at random) was asked for: the mesh is not used
+    collision = props.get("collision")
+    if isinstance(collision, ir.Const) and str(collision.value).strip().lower() not in MESH_COLLISIONS:
+        raise PrscError(f"unknown collision {collision.value!r} for a mesh (one of {', '.join(MESH_COLLISIONS)})"
+                        f"{did_you_mean(str(collision.value), MESH_COLLISIONS)}", collision.span)
+    names = _constant_strings(mesh)
+    files = [_mesh_file(obj, raw, mesh, folders) for raw in names or ()]
+    unset = [i for i, prop in enumerate(SIZES) if _builtin(props.get(prop))]
+    if unset and len(files) != 1:
+        raise PrscError(f"{obj.name}: the mesh is not one constant file, so its size cannot come from its "
+                        f"bounds; give {', '.join(SIZES[i] for i in unset)}", mesh.span)
+    if unset:
+        try:
+            extent = mesh_extent(files[0])
+        except PrscError as error:
+            raise PrscError(f"{obj.name}: {error.message}", mesh.span) from None
+        scale = props.get("scale")
+        for i in unset:
+            if extent[i] <= 0:
+                raise PrscError(f"{obj.name}: the mesh is flat along {'xyz'[i]}; give {SIZES[i]}", mesh.span)
+            size = ir.Const(mesh.span, ir.Type.SCALAR, extent[i])
+            props[SIZES[i]] = size if scale is None else ir.BinOp(mesh.span, ir.Type.SCALAR, "*", size, scale)
+    return replace(obj, properties=tuple((name, props[name]) for name in dict(obj.properties)))
+
+
+def with_mesh_sizes(program: ir.Program, include_dirs: Sequence[str] = ()) -> ir.Program:
+    """The program with every mesh object's shape and unset sizes filled in from its file."""
+    folders = mesh_folders(program.path, include_dirs)
+    objects = tuple(o if o.prop("mesh") is None else _sized(o, o.prop("mesh"), folders) for o in program.objects)
+    return replace(program, objects=objects)
