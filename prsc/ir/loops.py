@@ -129,9 +129,10 @@ class LoopStatements:
         values = loop_values(s, args, self._constant_value)
         end = args[-1].span if args else s.function_span
         range_span = Span(s.span.path, s.function_span.line, s.function_span.column, end.end_line, end.end_column + 1)
-        if len(values) > MAX_LOOP_ITERATIONS or self.iterations_used + len(values) > MAX_LOOP_ITERATIONS:
-            before = f" after {self.iterations_used} in earlier loops" if self.iterations_used else ""
-            raise PrscError(f"this loop runs {len(values)} times{before}; a spec unrolls at most "
+        total = self.iterations_used + len(values)
+        if total > MAX_LOOP_ITERATIONS:
+            more = f", which brings the spec's loops to {total} iterations" if total > len(values) else ""
+            raise PrscError(f"this loop runs {len(values)} times{more}; a spec unrolls at most "
                             f"{MAX_LOOP_ITERATIONS} loop iterations in all", range_span)
         self.iterations_used += len(values)
         if s.var in (ROOT_CLASS, "self", "workspace"):

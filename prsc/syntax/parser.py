@@ -29,7 +29,7 @@ _WORDS = {
     "COMPARE_OP": "a comparison",
 }
 _EXPRESSION_START = {"NAME", "NUMBER", "STRING", "LPAR", "LSQB", "LBRACE", "MINUS", "PLUS", "NOT",
-                     "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT"}
+                     "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT", "DISTANCE"}
 _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AHEAD", "BEHIND", "ABOVE",
                     "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "DEG", "_RELATIVE", "_AND",
