@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import copy
 
+import math
+
 import numpy as np
 import pytest
+from scipy import stats
 
 from prsc.cli import main
 from prsc.constraints import lower_program
@@ -78,6 +81,43 @@ def test_a_distance_require_is_checked_by_rejection_and_holds_in_every_scene(tmp
     a = next(o for o in bad["objects"] if o["name"] == "a")
     b["position"] = [a["position"][0] + 0.5, a["position"][1], a["position"][2] + 1.0]
     assert any("require at line 5" in problem for problem in check_scene(program, bad))
+
+
+BALL = ("a = Cube at Vector3D(0.2, 0.1, 0.92)\nb = Cube completely on t\n"
+        "require (distance from a to b) < 0.3\n")
+
+
+def test_an_upper_bound_on_a_distance_also_gives_the_box_around_the_ball_as_rows(tmp_path):
+    program = compile_text(tmp_path, BALL)
+    plan = next(p for p in lower_program(program).objects if p.name == "b")
+    assert len(plan.checks) == 1  # the ball itself is still checked
+    rows = plan.region.static_rows
+    box = rows.A[rows.labels == plan.checks[0].label_id]
+    bounds = rows.b[rows.labels == plan.checks[0].label_id]
+    # |x - 0.2| <= 0.3, |y - 0.1| <= 0.3, |z - 0.92| <= 0.3 (a's centre is known before b)
+    found = sorted(zip(map(tuple, box), bounds))
+    expected = sorted([((1, 0, 0), 0.5), ((0, 1, 0), 0.4), ((0, 0, 1), 1.22),
+                       ((-1, 0, 0), 0.1), ((0, -1, 0), 0.2), ((0, 0, -1), -0.62)])
+    assert [(f[0], round(f[1], 9)) for f in found] == [(tuple(float(v) for v in e[0]), e[1]) for e in expected]
+
+
+def _uniform_on_the_ring(radii: np.ndarray) -> float:
+    """A Kolmogorov-Smirnov p-value: are the radii those of points uniform on the ring
+    0.06 m < r < 0.3 m (where the 8 cm square the collision rule keeps clear lies inside
+    0.06 m)? Uniform over the area means r squared is uniform."""
+    ring = radii[radii > 0.06]
+    return stats.kstest((ring ** 2 - 0.06 ** 2) / (0.3 ** 2 - 0.06 ** 2), "uniform").pvalue
+
+
+def test_the_box_keeps_the_law_uniform_on_the_ball_and_the_test_sees_a_wrong_law(tmp_path):
+    program = compile_text(tmp_path, BALL)
+    scenes = list(Sampler(program, "exact").scenes(17, 400))
+    radii = np.array([np.hypot(*(positions(s)["b"][:2] - np.array([0.2, 0.1]))) for s in scenes])
+    assert np.all(radii < 0.3)
+    assert _uniform_on_the_ring(radii) > 0.001
+    # The wrong law of a naive polar draw: the radius itself uniform (crowds the centre).
+    wrong = np.random.default_rng(0).uniform(0.06, 0.3, size=400)
+    assert _uniform_on_the_ring(wrong) < 1e-4
 
 
 @pytest.mark.parametrize("text, expected", [
