@@ -195,9 +195,7 @@ def rows_direction(relation: str, target: Any, by: Any, support: Support, label:
     if up_to is None:
         return Polytope((-n)[None, :], np.array([-(base + d)]), np.zeros((0, 3)), np.zeros(0), np.full(1, label),
                         np.zeros(0, np.int64))
-    e = _scalar(up_to, f"the greatest distance of '{relation}'", span)
-    if e < d:
-        raise PrscError(f"'{relation} ... by (low, high)' needs low <= high, got ({d:g}, {e:g})", span)
+    e = _scalar(up_to, f"the greatest distance of '{relation}'", span)  # e < d: no room (a dead end)
     return Polytope(np.stack([-n, n]), np.array([-(base + d), base + e]), np.zeros((0, 3)), np.zeros(0),
                     np.full(2, label), np.zeros(0, np.int64))
 

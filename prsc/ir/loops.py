@@ -141,17 +141,16 @@ class LoopStatements:
         if existing is not None and not isinstance(existing, (VariableInfo, ConstantInfo, LoopNames)):
             raise PrscError(f"'{s.var}' is already {describe(existing)}: a loop variable needs a name of its own",
                             s.var_span)
-        bound: dict[str, Span] = {s.var: s.var_span}
         for statement in s.body:
             if isinstance(statement, (nodes.ImportFrom, nodes.ImportModule, nodes.ParamStmt)):
                 what = "a param" if isinstance(statement, nodes.ParamStmt) else "an import"
                 raise PrscError(f"{what} cannot be in a loop body: it is made once per spec, so write it "
                                 "before the loop", statement.span)
-            name, span = binding_of(statement)
-            if name == s.var and span is not None:
-                raise PrscError(f"the loop variable '{s.var}' cannot be bound in the loop body", span)
-            if name is not None and span is not None:
-                bound.setdefault(name, span)
+        bound: dict[str, Span] = {}
+        bound_names(s.body, (), bound)  # nested loops' names too: none outlives this loop
+        if s.var in bound:
+            raise PrscError(f"the loop variable '{s.var}' cannot be bound in the loop body", bound[s.var])
+        bound[s.var] = s.var_span
         exports = self.exports[self.current[-1]]
         saved = {name: (self.scope.names.get(name), exports.get(name)) for name in bound}
         named: dict[str, list[str]] = {name: [] for name in bound}
@@ -167,6 +166,8 @@ class LoopStatements:
                 binding = self.scope.names.get(name)
                 if isinstance(binding, ObjectInfo):
                     named[name].append(binding.name)
+                elif isinstance(binding, LoopNames):  # a nested loop's objects
+                    named[name].extend(binding.objects)
                 self._restore(name, *saved[name])
         for name in bound:  # after the loop a name of its body means nothing by itself
             if saved[name][0] is None:

@@ -141,3 +141,15 @@ def test_a_loop_in_an_imported_file_exports_its_numbered_objects(tmp_path):
     with pytest.raises(PrscError, match="'leg' names one object per iteration"):
         main_spec.write_text("from lib import *\nc = Cube on leg\n")
         compile_program(str(main_spec))
+
+
+def test_after_nested_loops_a_body_name_lists_every_object(tmp_path, capsys):
+    lines = check_error(tmp_path, capsys, "for i in range(2):\n    for j in range(3):\n        box = Cube\n"
+                                          "c = Cube on box\n")
+    assert lines[0] == ("bad.prs:6:13: error: 'box' names one object per iteration of the loop at line 3: "
+                        "after the loop, write one of box_0_0 ... box_1_2")
+
+
+def test_a_nested_loop_may_not_reuse_the_outer_variable(tmp_path, capsys):
+    lines = check_error(tmp_path, capsys, "for i in range(2):\n    for i in range(3):\n        Cube\n")
+    assert lines[0] == "bad.prs:4:9: error: the loop variable 'i' cannot be bound in the loop body"
