@@ -375,10 +375,7 @@ def implied_condition(
     compiler: ExprCompiler, condition: ir.Expr, target: str, anchor: str | None = None
 ) -> Callable[[SceneContext], tuple[list, list, list, list]] | None:
     """Rows (as lower_condition's) that a condition which is not linear implies, or None."""
-    try:
-        return AffineCompiler(compiler, target, anchor).implied(condition)
-    except _NotLinear:
-        return None
+    return AffineCompiler(compiler, target, anchor).implied(condition)
 
 
 def constant_apart_from(compiler: ExprCompiler, expr: ir.Expr, names: set[str]) -> bool:
