@@ -153,3 +153,9 @@ def test_after_nested_loops_a_body_name_lists_every_object(tmp_path, capsys):
 def test_a_nested_loop_may_not_reuse_the_outer_variable(tmp_path, capsys):
     lines = check_error(tmp_path, capsys, "for i in range(2):\n    for i in range(3):\n        Cube\n")
     assert lines[0] == "bad.prs:4:9: error: the loop variable 'i' cannot be bound in the loop body"
+
+
+def test_a_one_statement_body_may_follow_the_colon(tmp_path):
+    program = compile_text(tmp_path, "for i in range(2): c = Cup completely on t, with height 0.1 + 0.01 * i\n"
+                                     "for i in range(2): Cube completely on t\n")
+    assert [o.name for o in program.objects[1:]] == ["c_0", "c_1", "cube_1", "cube_2"]
