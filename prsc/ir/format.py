@@ -157,7 +157,8 @@ def format_program(program: ir.Program) -> str:
     if user_classes:
         out.append(f"classes ({len(user_classes)}):")
         for c in user_classes:
-            out.append(f"  {c.name}({c.parent})")
+            defaults = "; ".join(format_specifier(s) for s in c.specifiers)
+            out.append(f"  {c.name}({c.parent})" + (f"  default: {defaults}" if defaults else ""))
     if program.variables:
         out.append(f"variables ({len(program.variables)}):")
         for v in program.variables:

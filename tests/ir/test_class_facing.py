@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from prsc.cli import main
-from prsc.ir import compile_program
+from prsc.ir import compile_program, format_program
 from prsc.ir import model as ir
 from prsc.sampling import Sampler
 from prsc.syntax.parser import parse_source
@@ -57,6 +57,7 @@ def test_every_object_gets_its_own_draw_and_its_own_specifier_wins(tmp_path):
     assert [type(s).__name__ for s in orientation_specs(program, "e")] == ["With"]
     (mug,) = [c for c in program.classes if c.name == "Mug"]
     assert [type(s).__name__ for s in mug.specifiers] == ["Facing"]
+    assert "  Mug(Cup)  default: facing (0, 6.283185307179586)\n" in format_program(program)
 
 
 def test_subclasses_inherit_the_default_and_may_replace_it(tmp_path):
