@@ -254,6 +254,9 @@ class AffineCompiler:
                     if part is not None:
                         parts.append(part)
             return _conjunction(parts) if parts else None
+        if isinstance(e, ir.UnaryOp) and e.op == "not" and isinstance(e.operand, ir.Compare):
+            inner = e.operand
+            return self.implied(ir.Compare(inner.span, inner.type, _NEGATE[inner.op], inner.left, inner.right))
         if not isinstance(e, ir.Compare):
             return None
         if e.op in ("<", "<=") and isinstance(e.left, ir.Distance):

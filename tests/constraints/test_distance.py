@@ -85,18 +85,21 @@ BALL = ("a = Cube at Vector3D(0.2, 0.1, 0.92)\nb = Cube completely on t\n"
         "require (distance from a to b) < 0.3\n")
 
 
-def test_an_upper_bound_on_a_distance_also_gives_the_box_around_the_ball_as_rows(tmp_path):
-    program = compile_text(tmp_path, BALL)
+@pytest.mark.parametrize("condition", ["(distance from a to b) < 0.3", "0.3 >= distance from b to a",
+                                       "not (distance from a to b >= 0.3)", "b.z > 0 and distance from a to b < 0.3"])
+def test_an_upper_bound_on_a_distance_also_gives_the_box_around_the_ball_as_rows(tmp_path, condition):
+    program = compile_text(tmp_path, BALL.replace("(distance from a to b) < 0.3", condition))
     plan = next(p for p in lower_program(program).objects if p.name == "b")
     assert len(plan.checks) == 1  # the ball itself is still checked
     rows = plan.region.static_rows
     box = rows.A[rows.labels == plan.checks[0].label_id]
     bounds = rows.b[rows.labels == plan.checks[0].label_id]
     # |x - 0.2| <= 0.3, |y - 0.1| <= 0.3, |z - 0.92| <= 0.3 (a's centre is known before b)
-    found = sorted(zip(map(tuple, box), bounds))
-    expected = sorted([((1, 0, 0), 0.5), ((0, 1, 0), 0.4), ((0, 0, 1), 1.22),
-                       ((-1, 0, 0), 0.1), ((0, -1, 0), 0.2), ((0, 0, -1), -0.62)])
-    assert [(f[0], round(f[1], 9)) for f in found] == [(tuple(float(v) for v in e[0]), e[1]) for e in expected]
+    found = {(tuple(float(v) + 0.0 for v in row), round(float(bound), 9)) for row, bound in zip(box, bounds)}
+    expected = {((1, 0, 0), 0.5), ((0, 1, 0), 0.4), ((0, 0, 1), 1.22),
+                ((-1, 0, 0), 0.1), ((0, -1, 0), 0.2), ((0, 0, -1), -0.62)}
+    linear = {((0, 0, -1), 0.0)} if "b.z > 0" in condition else set()  # the linear part: exact rows too
+    assert found == expected | linear
 
 
 def _uniform_on_the_ring(radii: np.ndarray) -> float:
