@@ -19,8 +19,8 @@ from prsc.constraints import regions
 from prsc.constraints.context import SceneContext
 from prsc.constraints.distributions import sampler_for
 from prsc.constraints.operations import (
-    arith_operand, as_number, attribute, binary, compare, describe, error_at, face_point, finite, is_number, is_vector,
-    relative_to, truthy,
+    arith_operand, as_number, attribute, binary, compare, describe, distance, error_at, face_point, finite, is_number,
+    is_vector, relative_to, truthy,
 )
 from prsc.constraints.values import ObjectValue, RegionValue
 from prsc.errors import PrscError
@@ -217,6 +217,13 @@ class ExprCompiler:
             return constant(relative_to(value.value, frame.value, span))
         vf, ff = value.fn, frame.fn
         return Compiled(lambda ctx: relative_to(vf(ctx), ff(ctx), span), False)
+
+    def _c_Distance(self, e: ir.Distance) -> Compiled:
+        source, target, span = self.compile(e.source), self.compile(e.target), e.span
+        if source.const and target.const:
+            return constant(distance(source.value, target.value, span))
+        sf, tf = source.fn, target.fn
+        return Compiled(lambda ctx: distance(sf(ctx), tf(ctx), span), False)
 
     def _c_BinOp(self, e: ir.BinOp) -> Compiled:
         left, right, op, span = self.compile(e.left), self.compile(e.right), e.op, e.span

@@ -21,7 +21,7 @@ from prsc.constraints.evaluate import Fn
 from prsc.constraints.model import REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.position import specifier_rule, workspace_rule
-from prsc.constraints.requirements import RequirePlan, plan_requires, require_check, require_rule
+from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
 from prsc.constraints.values import DIMENSIONS, ObjectValue, RegionValue, dimension, static_dims
@@ -101,6 +101,9 @@ def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan)
             rules.append(lowered)
         else:
             checks.append(require_check(low, req, label, soft))
+            implied = implied_rule(low, me, req, label, soft, support is not None and rotation is not None) if not after else None
+            if implied is not None:
+                rules.append(implied)
 
     region = region_rules(rules)
     if region.static_rows is not None and not is_feasible(region.static_rows):

@@ -194,3 +194,11 @@ def as_number(v: Any, what: str, span: Span | None) -> float:
     if not is_number(v):
         raise error_at(f"{what} must be a number, got {describe(v)}", span)
     return float(v)
+
+
+def distance(source: Any, target: Any, span: Span | None) -> float:
+    """`distance from A to B`: the Euclidean distance between two positions (an object's centre)."""
+    a, b = as_position(source), as_position(target)
+    if a is None or b is None:
+        raise error_at(f"distance needs two objects, face points or vectors, not {describe(source if a is None else target)}", span)
+    return float(np.linalg.norm(np.asarray(a, dtype=float) - np.asarray(b, dtype=float)))

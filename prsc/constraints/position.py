@@ -44,6 +44,8 @@ def _kind_args_options(spec: ir.Specifier) -> tuple[str, tuple[ir.Expr, ...], tu
         if spec.relation not in rows.DIRECTION_AXES:
             raise PrscError(f"unknown direction {spec.relation!r}", spec.span)
         args = (spec.target,) if spec.by is None else (spec.target, spec.by)
+        if spec.up_to is not None:
+            args += (spec.up_to,)
         return "direction", args, (("relation", spec.relation),)
     if isinstance(spec, ir.AlignedWith):
         axis = spec.axis.strip("'\"").lower()

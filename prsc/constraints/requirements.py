@@ -12,7 +12,7 @@ from prsc.constraints.analysis import rigid
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import REQUIRE, RequireCheck, RowLabel, RowTemplate, Rule, SoftRequire
 from prsc.constraints.operations import truthy
-from prsc.constraints.requires import constant_apart_from, lower_condition, mentioned_objects
+from prsc.constraints.requires import constant_apart_from, implied_condition, lower_condition, mentioned_objects
 from prsc.constraints.state import LoweringState
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
@@ -89,13 +89,17 @@ def _on_p(cond: Callable[[SceneContext], tuple[list, list, list, list]]) -> Call
     return rows
 
 
-def _template(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, anchor: str | None) -> RowTemplate | None:
+Lowering = Callable[..., Callable[[SceneContext], tuple[list, list, list, list]] | None]
+
+
+def _template(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, anchor: str | None,
+              lowering: Lowering = lower_condition) -> RowTemplate | None:
     """The require's rows when everything but the target (and the anchor) is constant, else None."""
     target = me.name
     names = {target} | ({anchor} if anchor else set())
     if not constant_apart_from(low.compiler, req.condition, names):
         return None
-    cond = lower_condition(low.compiler, req.condition, target, anchor)
+    cond = lowering(low.compiler, req.condition, target, anchor)
     if cond is None:
         return None
     poly, bt, dt = _rows6(cond(low.fixed_context(me, anchor)), label)
@@ -107,19 +111,29 @@ def _template(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, 
     return None
 
 
-def require_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, soft: int | None, support_known: bool) -> Rule | None:
+def require_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, soft: int | None, support_known: bool,
+                 lowering: Lowering = lower_condition) -> Rule | None:
     """A lowered require as a rule on `me`'s position, or None when it is not linear there."""
-    cond = lower_condition(low.compiler, req.condition, me.name)
+    cond = lowering(low.compiler, req.condition, me.name)
     if cond is None:
         return None
     template = None
     if soft is None and support_known:
-        template = _template(low, me, req, label, None)
+        template = _template(low, me, req, label, None, lowering)
         if template is None:
             order = sorted((low.index_of[n] for n in mentioned_objects(req.condition) if n != me.name), reverse=True)
             for index in order:
                 anchor = low.program.objects[index].name
                 if rigid(low.facts, anchor):
-                    template = _template(low, me, req, label, anchor)
+                    template = _template(low, me, req, label, anchor, lowering)
                     break
     return Rule("require", label, req.span, (req.condition,), (), template, soft, (_on_p(cond),))
+
+
+def implied_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, soft: int | None,
+                 support_known: bool) -> Rule | None:
+    """Rows a hard require that is not linear implies (`distance ... < r`: a box), as a rule that
+    narrows `me`'s region; the require is still checked. None for a soft require or none known."""
+    if soft is not None:
+        return None  # a soft require may be false in a scene: it implies nothing
+    return require_rule(low, me, req, label, None, support_known, implied_condition)

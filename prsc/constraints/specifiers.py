@@ -184,13 +184,20 @@ def _frame(target: Any, span: Span | None) -> tuple[np.ndarray, np.ndarray]:
     raise PrscError("expected an object, a face point or a vector", span)
 
 
-def rows_direction(relation: str, target: Any, by: Any, support: Support, label: int, span: Span | None) -> Polytope:
-    """`left of X by d` etc.: n.(p - X) >= d + s(n), n the side's axis in X's frame."""
+def rows_direction(relation: str, target: Any, by: Any, support: Support, label: int, span: Span | None,
+                   up_to: Any = None) -> Polytope:
+    """`left of X by d` etc.: n.(p - X) >= d + s(n), n the side's axis in X's frame; with
+    `by (d, e)` also n.(p - X) <= e + s(n): the gap between the plane and the box lies in [d, e]."""
     point, rot = _frame(target, span)
     n = rot @ DIRECTION_AXES[relation]
     d = 0.0 if by is None else _scalar(by, f"the distance of '{relation}'", span)
-    offset = float(n @ point) + d + float(support(n[None, :])[0])
-    return Polytope((-n)[None, :], np.array([-offset]), np.zeros((0, 3)), np.zeros(0), np.full(1, label), np.zeros(0, np.int64))
+    base = float(n @ point) + float(support(n[None, :])[0])
+    if up_to is None:
+        return Polytope((-n)[None, :], np.array([-(base + d)]), np.zeros((0, 3)), np.zeros(0), np.full(1, label),
+                        np.zeros(0, np.int64))
+    e = _scalar(up_to, f"the greatest distance of '{relation}'", span)  # e < d: no room (a dead end)
+    return Polytope(np.stack([-n, n]), np.array([-(base + d), base + e]), np.zeros((0, 3)), np.zeros(0),
+                    np.full(2, label), np.zeros(0, np.int64))
 
 
 def rows_aligned(target: Any, axis: str, label: int, span: Span | None) -> Polytope:

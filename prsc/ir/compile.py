@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from typing import Sequence
 
@@ -10,12 +11,13 @@ from prsc.ir import model as ir
 from prsc.ir.builtins import (BUILTIN_SPAN, MATH_CONSTANTS, OBJECT_DEFAULTS, PROPERTY_TYPES, ROOT_CLASS,
                               SPECIFIER_PROPERTIES)
 from prsc.ir.checks import check_values, constant_number
-from prsc.ir.expressions import DrawIds, ExprResolver, article, type_words
+from prsc.ir.expressions import DrawIds, ExprResolver, article, expect, type_words
 from prsc.ir.imports import MATH, ModuleGraph, load_module_graph
+from prsc.ir.loops import LoopStatements, bound_names, iteration_name
 from prsc.ir.mesh_sizes import with_mesh_sizes
 from prsc.ir.order import order_properties, order_specifiers
-from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule, VariableInfo,
-                           describe, did_you_mean)
+from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule,
+                           VariableInfo, describe, did_you_mean)
 from prsc.ir.specifiers import lower_specifier
 from prsc.ir.walk import rebuild, referenced_objects, referenced_variables, specifier_exprs
 from prsc.syntax import nodes
@@ -35,17 +37,11 @@ def _root_class() -> ClassInfo:
 def _statement_names(module: nodes.Module) -> dict[str, Span]:
     """Names a module binds, with where (anonymous objects must not take them)."""
     out: dict[str, Span] = {}
-    for s in module.statements:
-        if isinstance(s, nodes.Assign):
-            out.setdefault(s.target, s.target_span)
-        elif isinstance(s, nodes.ObjectStmt) and s.name and s.name_span:
-            out.setdefault(s.name, s.name_span)
-        elif isinstance(s, nodes.ClassDef):
-            out.setdefault(s.name, s.name_span)
+    bound_names(module.statements, (), out)
     return out
 
 
-class Compiler:
+class Compiler(LoopStatements):
     """Walks the statements of a spec (imports inline, each file once) and builds the Program."""
 
     def __init__(self, graph: ModuleGraph):
@@ -71,6 +67,8 @@ class Compiler:
         self.anonymous_counts: dict[str, int] = {}
         self.variable_versions: dict[str, int] = {}
         self.variable_objects: dict[str, set[str]] = {}
+        self.iterations: tuple[int, ...] = ()  # the iteration number of each enclosing loop
+        self.iterations_used = 0
 
     # ------------------------------------------------------------ driving
 
@@ -88,7 +86,7 @@ class Compiler:
             requires=tuple(self.requires),
             workspace=self.workspace,
             classes=tuple(ir.ClassDef(c.name, c.parent.name if c.parent else None, tuple(c.defaults().items()),
-                                      c.span) for c in self.classes),
+                                      c.span, tuple(c.default_specifiers().values())) for c in self.classes),
             source_files=tuple(self.graph.modules[p].path for p in self.graph.order),
             sources=tuple((self.graph.modules[p].path, self.graph.modules[p].source) for p in self.graph.order),
         )
@@ -131,6 +129,8 @@ class Compiler:
             self._require(s)
         elif isinstance(s, nodes.ExprStmt):
             self._expression_statement(s)
+        elif isinstance(s, nodes.ForLoop):
+            self._loop(s)
         else:  # pragma: no cover
             raise PrscError("unsupported statement", s.span)
 
@@ -238,8 +238,9 @@ class Compiler:
                                 notes=((f"'{prop.name}' is first defined here", first[prop.name]),))
             first[prop.name] = prop.span
             if prop.name in SPECIFIER_PROPERTIES:
+                hint = "; for a default yaw write `facing: (0, 360 deg)`" if prop.name == "orientation" else ""
                 raise PrscError(f"a class cannot give {prop.name} a default: it is set by specifiers "
-                                f"(at, on, in, facing, ...)", prop.span)
+                                f"(at, on, in, facing, ...){hint}", prop.span)
             value = resolver.resolve(prop.value)
             accepted = PROPERTY_TYPES.get(prop.name)
             if accepted is not None and value.type != T.ANY and value.type not in accepted:
@@ -247,6 +248,13 @@ class Compiler:
                                 value.span)
             info.own[prop.name] = value
             resolver.self_props[prop.name] = value.type
+        for spec in s.specifiers:
+            if spec.word in info.own_specifiers:
+                raise PrscError(f"duplicate `{spec.word}:` in class {s.name}", spec.span,
+                                notes=(("first given here", info.own_specifiers[spec.word].span),))
+            direction = expect(resolver.resolve(spec.value), {T.VECTOR, T.SCALAR},
+                               "the default after `facing:` (a vector, or a yaw angle)")
+            info.own_specifiers[spec.word] = ir.Facing(spec.span, ("orientation",), (), direction)
         templates = info.defaults()
         order_properties(templates, {k: v.span for k, v in templates.items()}, None, s.name)  # cycles
         self._bind(s.name, info, s.name_span)
@@ -305,8 +313,14 @@ class Compiler:
             if isinstance(existing, (ClassInfo, ObjectInfo)):
                 self._bind(name, None, name_span)  # raises "already defined"
         object_name = name if name is not None else self._anonymous_name(cls)
+        if name is not None and self.iterations:
+            object_name = iteration_name(name, self.iterations)
         resolver = ExprResolver(self.scope, self.draws)
         specifiers = [lower_specifier(resolver, cls, s) for s in specifier_asts]
+        if not any("orientation" in spec.sets for spec in specifiers):
+            # the class's default orientation specifiers (`facing:` in its body), drawn afresh
+            for default in cls.default_specifiers().values():
+                specifiers.append(self._instantiate_specifier(default, object_name))
         overrides: dict[str, ir.With] = {}
         for spec in specifiers:
             if isinstance(spec, ir.With) and spec.prop not in SPECIFIER_PROPERTIES:
@@ -350,6 +364,14 @@ class Compiler:
         self.scope.objects[object_name] = info
         if name is not None:
             self._bind(name, info, name_span)
+            if object_name != name:
+                self._bind(object_name, info, name_span)
+
+    def _instantiate_specifier(self, template: ir.Specifier, object_name: str) -> ir.Specifier:
+        """A class's default specifier for one object (see _instantiate)."""
+        changes = {f.name: self._instantiate(getattr(template, f.name), object_name)
+                   for f in dataclasses.fields(template) if isinstance(getattr(template, f.name), ir.Expr)}
+        return dataclasses.replace(template, **changes)
 
 
 def compile_program(path: str, include_dirs: Sequence[str] = ()) -> ir.Program:

@@ -10,8 +10,8 @@ from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
 from prsc.ir.builtins import (CONSTRUCTORS, FACE_WORD_GROUPS, FUNCTIONS, MATH_CONSTANTS, PROPERTY_TYPES,
                               SPECIFIER_PROPERTIES)
-from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule, VariableInfo,
-                           describe, did_you_mean)
+from prsc.ir.scope import (ClassInfo, ConstantInfo, LoopNames, MathModule, ObjectInfo, Scope, SpecModule,
+                           VariableInfo, describe, did_you_mean)
 from prsc.syntax import nodes
 
 T = ir.Type
@@ -105,6 +105,12 @@ class ExprResolver:
             raise PrscError("'math' is a module: use math.pi, math.sin(x), ...", span)
         if isinstance(binding, SpecModule):
             raise PrscError(f"'{name}' is a module: use {name}.<name>", span)
+        if isinstance(binding, LoopNames):
+            objects = binding.objects
+            which = f"{objects[0]} ... {objects[-1]}" if len(objects) > 1 else "".join(objects)
+            raise PrscError(f"'{name}' names one object per iteration of the loop at line {binding.span.line}: "
+                            f"after the loop, write one of {which}" if objects else
+                            f"'{name}' is bound only inside the loop at line {binding.span.line}", span)
         raise PrscError(f"'{name}' cannot be used here", span)  # pragma: no cover
 
     # ------------------------------------------------------------ attributes
@@ -241,8 +247,8 @@ class ExprResolver:
                         right.span.end_column)
             pairs.append(ir.Compare(span, T.BOOL, op, left, right))
             left = right
-        if len(pairs) == 1:
-            return pairs[0]
+        if len(pairs) == 1:  # the whole comparison as written, brackets included
+            return ir.Compare(e.span, T.BOOL, pairs[0].op, pairs[0].left, pairs[0].right)
         return ir.BoolOp(e.span, T.BOOL, "and", tuple(pairs))
 
     def _BoolOp(self, e: nodes.BoolOp) -> ir.Expr:
@@ -267,6 +273,11 @@ class ExprResolver:
         target = expect(self.resolve(e.target), {T.OBJECT}, f"the target of `{' '.join(e.words)}`")
         words = tuple(seen[g] for g in sorted(seen))
         return ir.FacePoint(e.span, T.ORIENTED_POINT, target, words)
+
+    def _Distance(self, e: nodes.Distance) -> ir.Expr:
+        source = expect(self.resolve(e.source), LOCATED_TYPES, "the point after `distance from`")
+        target = expect(self.resolve(e.target), LOCATED_TYPES, "the point after `distance from ... to`")
+        return ir.Distance(e.span, T.SCALAR, source, target)
 
     def _RelativeTo(self, e: nodes.RelativeTo) -> ir.Expr:
         value = expect(self.resolve(e.value), POINT_TYPES, "the offset before `relative to`")

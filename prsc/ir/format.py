@@ -80,6 +80,8 @@ def format_expr(expr: ir.Expr) -> str:
     if isinstance(expr, ir.BoolOp):
         p = _PRECEDENCE[expr.op]
         return f" {expr.op} ".join(_wrap(o, p + 1) for o in expr.operands)
+    if isinstance(expr, ir.Distance):
+        return f"(distance from {_wrap(expr.source, 9)} to {_wrap(expr.target, 9)})"
     if isinstance(expr, ir.Call):
         return f"{expr.func}(" + ", ".join(format_expr(a) for a in expr.args) + ")"
     if isinstance(expr, ir.Distribution):
@@ -113,6 +115,8 @@ def format_specifier(spec: ir.Specifier) -> str:
     if isinstance(spec, ir.Direction):
         word = DIRECTION_PHRASES.get(spec.relation, spec.relation)
         by = f" by {_arg(spec.by)}" if spec.by is not None else ""
+        if spec.up_to is not None:
+            by = f" by ({_arg(spec.by)}, {_arg(spec.up_to)})"
         return f"{word} {_arg(spec.target)}{by}"
     if isinstance(spec, ir.Beyond):
         return f"beyond {_arg(spec.target)} by {_arg(spec.by)} from {_arg(spec.origin)}"
@@ -153,7 +157,8 @@ def format_program(program: ir.Program) -> str:
     if user_classes:
         out.append(f"classes ({len(user_classes)}):")
         for c in user_classes:
-            out.append(f"  {c.name}({c.parent})")
+            defaults = "; ".join(format_specifier(s) for s in c.specifiers)
+            out.append(f"  {c.name}({c.parent})" + (f"  default: {defaults}" if defaults else ""))
     if program.variables:
         out.append(f"variables ({len(program.variables)}):")
         for v in program.variables:

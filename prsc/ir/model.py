@@ -102,6 +102,15 @@ class RelativeTo(Expr):
 
 
 @dataclass(frozen=True)
+class Distance(Expr):
+    """`distance from A to B`: the Euclidean distance between two points (an object's is
+    its centre, a face point's its position); docs/language.md, "distance from X to Y"."""
+
+    source: Expr
+    target: Expr
+
+
+@dataclass(frozen=True)
 class BinOp(Expr):
     """Arithmetic `+ - * /` on scalars and vectors."""
 
@@ -240,11 +249,15 @@ class On(Specifier):
 
 @dataclass(frozen=True)
 class Direction(Specifier):
-    """`left of X [by d]` etc.; relation in left/right/ahead/behind/above/below."""
+    """`left of X [by d]` etc.; relation in left/right/ahead/behind/above/below.
+
+    by is the least gap (None: 0); up_to, from `by (low, high)`, the greatest (None: no bound).
+    """
 
     relation: str
     target: Expr
     by: Expr | None
+    up_to: Expr | None = None
 
 
 @dataclass(frozen=True)
@@ -290,6 +303,9 @@ class ClassDef:
     parent: str | None
     defaults: tuple[tuple[str, Expr], ...]
     span: Span
+    # Default orientation specifiers (`facing: yaw` in the body), inherited; an object's
+    # own orientation specifier replaces them.
+    specifiers: tuple[Specifier, ...] = ()
 
 
 @dataclass(frozen=True)

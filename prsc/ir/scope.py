@@ -18,6 +18,8 @@ class ClassInfo:
     parent: ClassInfo | None
     span: Span
     own: dict[str, ir.Expr] = field(default_factory=dict)
+    # Default orientation specifiers of the body (`facing: yaw`), templates like `own`.
+    own_specifiers: dict[str, ir.Specifier] = field(default_factory=dict)
 
     def chain(self) -> list[ClassInfo]:
         """This class and its ancestors, most derived first."""
@@ -32,6 +34,13 @@ class ClassInfo:
         merged: dict[str, ir.Expr] = {}
         for cls in reversed(self.chain()):
             merged.update(cls.own)
+        return merged
+
+    def default_specifiers(self) -> dict[str, ir.Specifier]:
+        """The default orientation specifiers, by their word, children overriding parents."""
+        merged: dict[str, ir.Specifier] = {}
+        for cls in reversed(self.chain()):
+            merged.update(cls.own_specifiers)
         return merged
 
     def default(self, prop: str) -> ir.Expr | None:
@@ -96,6 +105,15 @@ class VariableInfo:
 
 
 @dataclass
+class LoopNames:
+    """A name a loop body bound: after the loop it means one object per iteration."""
+
+    name: str
+    objects: tuple[str, ...]  # the IR names of the objects it named, in iteration order
+    span: Span
+
+
+@dataclass
 class ConstantInfo:
     """A named constant (`pi` after `from math import *`)."""
 
@@ -119,7 +137,7 @@ class SpecModule:
     span: Span | None = None
 
 
-Binding = ClassInfo | ObjectInfo | VariableInfo | ConstantInfo | MathModule | SpecModule
+Binding = ClassInfo | ObjectInfo | VariableInfo | ConstantInfo | MathModule | SpecModule | LoopNames
 
 
 def describe(binding: object) -> str:
@@ -137,6 +155,8 @@ def describe(binding: object) -> str:
         return "the math module"
     if isinstance(binding, SpecModule):
         return f"the module {binding.name}"
+    if isinstance(binding, LoopNames):
+        return f"a name bound in a loop body ({', '.join(binding.objects[:3])}{', ...' if len(binding.objects) > 3 else ''})"
     return "a name"
 
 

@@ -96,6 +96,14 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
     if isinstance(spec, nodes.DirectionSpec):
         word = DIRECTION_PHRASES.get(spec.relation, spec.relation)
         target = expect(r(spec.target), LOCATED_TYPES, f"the reference of `{word}`")
+        if isinstance(spec.by, nodes.Pair):  # `by (low, high)`: the gap lies in [low, high]
+            low = expect(r(spec.by.low), {T.SCALAR}, f"the least gap in `{word} ... by (low, high)`")
+            high = expect(r(spec.by.high), {T.SCALAR}, f"the greatest gap in `{word} ... by (low, high)`")
+            low_value, high_value = _number(low), _number(high)
+            if low_value is not None and high_value is not None and high_value < low_value:
+                raise PrscError(f"`{word} X by (low, high)` needs low <= high, not ({low_value:g}, {high_value:g})",
+                                spec.by.span)
+            return ir.Direction(span, POSITION, BOX_READS, spec.relation, target, low, high)
         by = expect(r(spec.by), {T.SCALAR}, f"the gap after `{word} ... by`") if spec.by is not None else None
         return ir.Direction(span, POSITION, BOX_READS, spec.relation, target, by)
     if isinstance(spec, nodes.BeyondSpec):

@@ -3,7 +3,7 @@
 A statement continues on the next line inside brackets and after a trailing comma, so
 those newlines are dropped. Every other newline is passed on, followed by _INDENT or
 _DEDENT tokens when the indentation changes (the grammar accepts them only in class
-bodies, so an indented top-level statement is a syntax error there, with its position).
+and loop bodies, so an indented top-level statement is a syntax error there, with its position).
 """
 
 from __future__ import annotations
@@ -83,7 +83,7 @@ class Layout(PostLex):
                 last = token
                 continue
             if last is None and token.column != 1:
-                raise LayoutError("unexpected indentation (only a class body is indented)", token)
+                raise LayoutError("unexpected indentation (only a class or loop body is indented)", token)
             if kind in OPENING:
                 brackets.append(token)
                 if len(brackets) > MAX_BRACKET_DEPTH:

@@ -143,6 +143,14 @@ class FacePoint(Expr):
 
 
 @dataclass(frozen=True)
+class Distance(Expr):
+    """`distance from source to target` (docs/language.md, "distance from X to Y")."""
+
+    source: Expr
+    target: Expr
+
+
+@dataclass(frozen=True)
 class RelativeTo(Expr):
     """`value relative to frame`."""
 
@@ -313,6 +321,14 @@ class ClassProperty(Node):
 
 
 @dataclass(frozen=True)
+class ClassSpecifier(Node):
+    """`facing: value` inside a class body: a default orientation specifier."""
+
+    word: str
+    value: Expr
+
+
+@dataclass(frozen=True)
 class ClassDef(Statement):
     """`class Name(Parent):` with its property lines."""
 
@@ -321,6 +337,19 @@ class ClassDef(Statement):
     parent: str | None
     parent_span: Span | None
     properties: tuple[ClassProperty, ...]
+    specifiers: tuple[ClassSpecifier, ...] = ()
+
+
+@dataclass(frozen=True)
+class ForLoop(Statement):
+    """`for var in range(args):` with its indented body (unrolled by prsc/ir)."""
+
+    var: str
+    var_span: Span
+    function: str  # the name called after `in` (the front end accepts only `range`)
+    function_span: Span
+    args: tuple[Expr, ...]
+    body: tuple[Statement, ...]
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ _WORDS = {
     "COMPARE_OP": "a comparison",
 }
 _EXPRESSION_START = {"NAME", "NUMBER", "STRING", "LPAR", "LSQB", "LBRACE", "MINUS", "PLUS", "NOT",
-                     "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT"}
+                     "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT", "DISTANCE"}
 _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AHEAD", "BEHIND", "ABOVE",
                     "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "DEG", "_RELATIVE", "_AND",
@@ -112,6 +112,18 @@ def _acceptable(error: UnexpectedToken) -> set[str]:
     return accepted or set(error.expected)
 
 
+def _opened_by(error: UnexpectedToken) -> str | None:
+    """CLASS or FOR: the keyword of the block whose indented body the parser waits for."""
+    try:
+        stack = error.interactive_parser.parser_state.value_stack
+    except AttributeError:  # pragma: no cover - lark internals changed: keep the class wording
+        return None
+    for item in reversed(stack):
+        if isinstance(item, Token) and item.type in ("CLASS", "FOR"):
+            return item.type
+    return None
+
+
 def _unclosed_note(path: str, layout: Layout, token: Token) -> tuple[tuple[str, Span], ...]:
     """A note pointing at the innermost open bracket when the error is on a later line."""
     if layout.open_brackets and (token.line or 0) > (layout.open_brackets[-1].line or 0):
@@ -130,10 +142,12 @@ def _syntax_error(path: str, error: UnexpectedInput) -> PrscError:
                         token.end_line or token.line or 1, (token.end_column or token.column or 1) + 1)
         expected = _acceptable(error)
         if token.type == "_INDENT":
-            return PrscError("unexpected indentation (only a class body is indented)", span)
+            return PrscError("unexpected indentation (only a class or loop body is indented)", span)
         if token.type == "NAME" and "WITH" in expected and "AT" in expected:
             return PrscError(f"unknown specifier '{token}'; expected {_describe_expected(expected)}", span)
         if "_INDENT" in expected and len(expected) == 1:
+            if _opened_by(error) == "FOR":
+                return PrscError("expected an indented loop body (one statement per line)", span)
             return PrscError("expected an indented class body (`prop: value` lines)", span)
         return PrscError(f"unexpected {_describe_token(token)}; expected {_describe_expected(expected)}", span,
                          notes=_unclosed_note(path, _parser().options.postlex, token))

@@ -104,10 +104,21 @@ class ToAst(Transformer):
     def class_def(self, meta, children):
         names = [c for c in children if isinstance(c, Token) and c.type == "NAME"]
         props = tuple(c for c in children if isinstance(c, n.ClassProperty))
+        specs = tuple(c for c in children if isinstance(c, n.ClassSpecifier))
         parent = names[1] if len(names) > 1 else None
         return n.ClassDef(self._span(meta), str(names[0]), self._tok(names[0]),
                           str(parent) if parent is not None else None,
-                          self._tok(parent) if parent is not None else None, props)
+                          self._tok(parent) if parent is not None else None, props, specs)
+
+    def class_specifier(self, meta, children):
+        word, value = children
+        return n.ClassSpecifier(self._span(meta), str(word), value)
+
+    def for_loop(self, meta, children):
+        _for, var, _in, function, _lpar, *rest = children
+        args = tuple(c for c in rest if isinstance(c, n.Expr))
+        body = tuple(c for c in rest if isinstance(c, n.Statement))
+        return n.ForLoop(self._span(meta), str(var), self._tok(var), str(function), self._tok(function), args, body)
 
     def class_property(self, meta, children):
         name, value = children
@@ -201,6 +212,10 @@ class ToAst(Transformer):
         if isinstance(inner, n.FacePoint) and not inner.words_closed:
             return n.FacePoint(self._span(meta), (str(word),) + inner.words, inner.target)
         return n.FacePoint(self._span(meta), (str(word),), inner)
+
+    def distance(self, meta, children):
+        _distance, _from, source, target = children
+        return n.Distance(self._span(meta), source, target)
 
     def degrees(self, meta, children):
         return n.Degrees(self._span(meta), children[0])

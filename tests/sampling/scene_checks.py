@@ -241,6 +241,11 @@ class Evaluator:
                      "max": max, "hypot": math.hypot, "atan2": math.atan2}[e.func]
                 return Iv.exact(f(*[float(a.lo) for a in args]))
             raise Unknown("a function of a random value")
+        if isinstance(e, ir.Distance):
+            a, b = self.vec(self.ev(e.source)), self.vec(self.ev(e.target))
+            if np.any(a.lo != a.hi) or np.any(b.lo != b.hi):
+                raise Unknown("a distance to a random point")
+            return Iv.exact(float(np.linalg.norm(a.lo - b.lo)))
         if isinstance(e, ir.Distribution):
             if e.kind == "range":
                 lo, hi = self.num(self.ev(e.args[0])), self.num(self.ev(e.args[1]))
@@ -571,6 +576,11 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         margin = float(n @ p) - cn - d - body.s(n)
         if margin < -TOL:
             return f"{spec.relation} violated by {-margin:.3g} m"
+        if spec.up_to is not None:  # `by (low, high)`: the gap is at most high
+            nearest = cn if isinstance(target, (Body, Point)) else float(cv.lo)
+            over = float(n @ p) - nearest - body.s(n) - float(ev.num(ev.ev(spec.up_to)).hi)
+            if over > TOL:
+                return f"{spec.relation} gap {over:.3g} m more than its greatest value"
         return None
     if isinstance(spec, ir.AlignedWith):
         target = ev.ev(spec.target)
