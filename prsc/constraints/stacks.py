@@ -1,0 +1,69 @@
+"""`stably on X`: a stack whose centres of mass stay over their supports, as exact rows.
+
+The object rests on X as with `on X` (its centre over X's top face). When X itself stands
+`stably on` Y, and so on down, the centre of mass of the object together with everything
+between it and each lower support must also lie over that support's top face: for the
+supports A_1 = Y, A_2, ... with the objects x_j between (masses m_j, centres p_j),
+
+    (m p + sum_j m_j p_j) / (m + sum_j m_j)  over A_k's top face,
+
+linear in p, so each is four rows. A tower built this way stands under gravity on flat
+supports whatever order the scene's objects are drawn in (docs/language.md, "Stacks").
+Masses are the `mass` property where it is a constant, else density times box volume
+(centre of mass at the box centre, as for a uniform box).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from prsc.constraints.specifiers import rows_on
+from prsc.constraints.support import Support
+from prsc.constraints.values import ObjectValue
+from prsc.errors import PrscError, Span
+from prsc.geometry.polytope import Polytope, intersect
+
+DENSITY = 500.0
+"""kg/m^3 of an object that declares no mass (the scene JSON's default; docs/language.md)."""
+
+
+def object_mass(obj: ObjectValue) -> float:
+    """The object's mass: its `mass` if a number, else density times its box volume."""
+    mass = obj.props.get("mass")
+    if isinstance(mass, (int, float)) and not isinstance(mass, bool) and mass > 0:
+        return float(mass)
+    assert obj.dims is not None
+    return DENSITY * float(np.prod(obj.dims))
+
+
+def _face_rows(support: ObjectValue) -> tuple[np.ndarray, np.ndarray]:
+    """Rows a . q <= c keeping q's projection along the support's up axis inside its top face."""
+    assert support.position is not None and support.rotation is not None and support.dims is not None
+    u, v = support.rotation[:, 0], support.rotation[:, 1]
+    a = np.stack([u, -u, v, -v])
+    half = np.array([support.dims[0], support.dims[0], support.dims[1], support.dims[1]]) * 0.5
+    return a, a @ support.position + half
+
+
+def rows_stably(chain: Sequence[Any], mass: float, support: Support, label: int, span: Span | None) -> Polytope:
+    """`stably on X`: rows_on(X), and for each lower support in `chain` (X, Y, ...: each
+    stably on the next) the centre of mass of the object and the objects above it in rows."""
+    target = chain[0]
+    rows = rows_on(target, False, support, label, span)
+    if not isinstance(target, ObjectValue):
+        return rows
+    carried = np.zeros(3)  # sum of m_j p_j over the objects between the object and the support
+    total = mass
+    for above, below in zip(chain, chain[1:]):
+        if above.position is None or above.dims is None or below.position is None:
+            raise PrscError(f"{above.name} is not placed yet here", span)
+        m = object_mass(above)
+        carried = carried + m * above.position
+        total += m
+        a, c = _face_rows(below)
+        # a . (mass p + carried) / total <= c  <=>  a . p <= (total c - a . carried) / mass
+        b = (total * c - a @ carried) / mass
+        rows = intersect(rows, Polytope(a, b, np.zeros((0, 3)), np.zeros(0), np.full(4, label), np.zeros(0, np.int64)))
+    return rows
