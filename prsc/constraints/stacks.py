@@ -7,7 +7,8 @@ supports A_1 = Y, A_2, ... with the objects x_j between (masses m_j, centres p_j
 
     (m p + sum_j m_j p_j) / (m + sum_j m_j)  over A_k's top face,
 
-linear in p, so each is four rows. A tower built this way stands under gravity on flat
+over the contact between A_k and the object on it (the overlap of that object's footprint and
+A_k's top face): linear in p, so each support gives eight rows. A tower built this way stands under gravity on flat
 supports whatever order the scene's objects are drawn in (docs/language.md, "Stacks").
 Masses are the `mass` property where it is a constant, else density times box volume
 (centre of mass at the box centre, as for a uniform box).
@@ -25,6 +26,10 @@ from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope, intersect
 
+MARGIN = 0.25
+"""Each face is shrunk by this fraction of its half-extents: a centre of mass right at an edge
+balances in statics but tips under a simulator's soft contacts (measured in docs/language.md)."""
+
 DENSITY = 500.0
 """kg/m^3 of an object that declares no mass (the scene JSON's default; docs/language.md)."""
 
@@ -39,12 +44,19 @@ def object_mass(obj: ObjectValue) -> float:
 
 
 def _face_rows(support: ObjectValue) -> tuple[np.ndarray, np.ndarray]:
-    """Rows a . q <= c keeping q's projection along the support's up axis inside its top face."""
+    """Rows a . q <= c keeping q inside the object's face (its top or bottom) shrunk by MARGIN."""
     assert support.position is not None and support.rotation is not None and support.dims is not None
     u, v = support.rotation[:, 0], support.rotation[:, 1]
     a = np.stack([u, -u, v, -v])
     half = np.array([support.dims[0], support.dims[0], support.dims[1], support.dims[1]]) * 0.5
-    return a, a @ support.position + half
+    return a, a @ support.position + half * (1.0 - MARGIN)
+
+
+def _rows(face: tuple[np.ndarray, np.ndarray], mass: float, carried: np.ndarray, total: float, label: int) -> Polytope:
+    """The centre of mass (mass p + carried) / total over the face: a . p <= (total c - a . carried) / mass."""
+    a, c = face
+    b = (total * c - a @ carried) / mass
+    return Polytope(a, b, np.zeros((0, 3)), np.zeros(0), np.full(len(b), label), np.zeros(0, np.int64))
 
 
 def rows_stably(chain: Sequence[Any], mass: float, support: Support, label: int, span: Span | None) -> Polytope:
@@ -56,14 +68,15 @@ def rows_stably(chain: Sequence[Any], mass: float, support: Support, label: int,
         return rows
     carried = np.zeros(3)  # sum of m_j p_j over the objects between the object and the support
     total = mass
+    rows = intersect(rows, _rows(_face_rows(target), mass, carried, total, label))
     for above, below in zip(chain, chain[1:]):
         if above.position is None or above.dims is None or below.position is None:
             raise PrscError(f"{above.name} is not placed yet here", span)
         m = object_mass(above)
         carried = carried + m * above.position
         total += m
-        a, c = _face_rows(below)
-        # a . (mass p + carried) / total <= c  <=>  a . p <= (total c - a . carried) / mass
-        b = (total * c - a @ carried) / mass
-        rows = intersect(rows, Polytope(a, b, np.zeros((0, 3)), np.zeros(0), np.full(4, label), np.zeros(0, np.int64)))
+        # The contact between `above` and `below` is the overlap of above's footprint and
+        # below's top face: the centre of mass must lie over both.
+        rows = intersect(rows, _rows(_face_rows(below), mass, carried, total, label),
+                         _rows(_face_rows(above), mass, carried, total, label))
     return rows
