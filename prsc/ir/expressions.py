@@ -149,7 +149,7 @@ class ExprResolver:
                 raise PrscError(f"{prop} is a list of support surfaces: pick one by its index, "
                                 f"as in {_object_words(target, cls)}.{prop}[0] (the lowest)", prop_span)
             raise PrscError(f"unknown property '{prop}' of {_object_words(target, cls)}"
-                            f"{did_you_mean(prop, [*cls.properties(), 'x', 'y', 'z'])}", prop_span)
+                            f"{did_you_mean(prop, [*cls.properties(), 'x', 'y', 'z', *declared_surfaces(cls)])}", prop_span)
         if target.type == T.VECTOR:
             if prop in ("x", "y", "z"):
                 return ir.PropertyRef(span, T.SCALAR, target, prop)
@@ -174,6 +174,7 @@ class ExprResolver:
             if cls is not None and attr.name in declared_surfaces(cls) and not cls.has(attr.name):
                 index = expect(self.resolve(e.index), {T.SCALAR}, f"the index of {attr.name}")
                 return ir.SurfaceRef(e.span, T.REGION, target, attr.name, index)
+        self.resolve(attr)  # an unknown property is that error, at its name
         raise PrscError("only a support-surface list can be indexed, as in shelf.boards[1] "
                         "(a class lists its surfaces in `surfaces`)", e.span)
 
