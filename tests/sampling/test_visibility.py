@@ -9,6 +9,7 @@ the relations themselves, and the same test rejects a law that lets boxes stick 
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -60,6 +61,7 @@ def _uniform_on_table(rng: np.random.Generator, n: int, half: np.ndarray) -> np.
     return np.stack([x, y, np.full(n, TOP)], axis=1)
 
 
+@functools.lru_cache(maxsize=None)
 def _expected() -> np.ndarray:
     """Cell probabilities of the uniform law on the feasible set: Monte Carlo, 600k points."""
     points = _uniform_on_table(np.random.default_rng(7), 600_000, CUBE_HALF)
@@ -101,10 +103,14 @@ def test_visible_from_keeps_boxes_in_the_frustum_and_is_uniform_there(tmp_path):
 def test_the_uniformity_test_rejects_a_law_that_lets_boxes_stick_out():
     # The wrong law: uniform over centres in the view (the box may stick out of it).
     rng = np.random.default_rng(3)
-    points = _uniform_on_table(rng, 40_000, CUBE_HALF)
+    points = _uniform_on_table(rng, 80_000, CUBE_HALF)
     wrong = points[_inside_view(points, np.zeros(3))][:N]
     assert not _inside_view(wrong, CUBE_HALF).all()
     assert _p_value(wrong, _expected()) < P_MIN
+    # A law on the right set, but weighted (1 to 2) towards +x: rejected too.
+    inside = points[_inside_view(points, CUBE_HALF)]
+    biased = inside[rng.uniform(size=len(inside)) < 0.5 + 0.5 * (inside[:, 0] + 0.6) / 1.2][:N]
+    assert len(biased) == N and _p_value(biased, _expected()) < P_MIN
     # and the right law drawn the same way passes.
     right = points[_inside_view(points, CUBE_HALF)][:N]
     assert _p_value(right, _expected()) > P_MIN
