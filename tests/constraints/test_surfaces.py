@@ -4,6 +4,7 @@ the errors at the right line."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -94,3 +95,11 @@ def test_a_bad_surface_container_or_camera_is_an_error_at_its_line(tmp_path, lin
     with pytest.raises(PrscError, match=message) as caught:
         Sampler(_program(tmp_path, text), "exact").scene(0, 0)
     assert caught.value.span is not None and caught.value.span.line == text.count("\n")
+
+
+@pytest.mark.parametrize("marker", ["shelf.boards[", "completely in bin", "stably on", "visible from camera"])
+def test_the_guides_example_samples_and_every_scene_checks(tmp_path, marker):
+    blocks = re.findall(r"```prs\n(.*?)```", (REPO / "docs" / "language.md").read_text(), re.S)
+    program = _program(tmp_path, next(b for b in blocks if marker in b))
+    report = check_scenes(program, _scenes(program, 20))
+    assert not report and report.checked > 0, report
