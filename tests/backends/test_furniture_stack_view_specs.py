@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from prsc.backends import TARGETS
@@ -32,12 +33,23 @@ def test_the_spec_compiles_to_every_format_and_its_scenes_are_at_rest(tmp_path, 
     assert not report and report.checked > 0, report
 
 
+def test_the_fourth_cube_is_at_least_10_cm_from_every_cube_of_the_stack():
+    spec = SPECS / "stack_and_cube.prs"
+    sampler = Sampler(compile_program(str(spec), (str(SPECS),)), "exact")
+    for index in range(200):
+        boxes = {o.name: o for o in sampler.sample(0, index).objects}
+        n = boxes["base"].rotation[:, 0]  # separated along the base's x: a lower bound on the distance
+        def reach(o, sign):
+            return sign * float(n @ o.position) + float(np.abs(n @ o.rotation) @ (np.array(o.dims) / 2))
+        gap = -reach(boxes["loose"], -1) - max(reach(boxes[k], 1) for k in ("base", "middle", "top_cube"))
+        assert gap >= 0.1 - 1e-9
+
+
 def test_what_camera_view_declares_visible_is_whole_in_the_cameras_own_image(tmp_path):
     """Rendered by MuJoCo from the compiled camera (segmentation), each object `visible from
     camera` alone (the others moved away: the frustum says nothing of occlusion): it shows,
     and touches no border of the image (no edge of the image cuts it)."""
     import mujoco
-    import numpy as np
 
     from prsc.ir import model as ir
 
