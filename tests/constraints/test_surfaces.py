@@ -103,3 +103,18 @@ def test_the_guides_example_samples_and_every_scene_checks(tmp_path, marker):
     program = _program(tmp_path, next(b for b in blocks if marker in b))
     report = check_scenes(program, _scenes(program, 20))
     assert not report and report.checked > 0, report
+
+
+def test_the_checker_flags_a_bottle_off_its_board_or_a_box_out_of_view(tmp_path):
+    text = (HEAD + "b = Bottle completely on shelf.boards[2]\n"
+            "cam = Camera at Vector3D(0, -1, 1.2), facing 0 deg\nc = Cube on floor, visible from cam\n")
+    program = _program(tmp_path, text)
+    scene = _scenes(program, 1)[0]
+    assert not check_scenes(program, [scene])
+    objects = {o["name"]: o for o in scene["objects"]}
+    for name, axis, shift, words in (("b", 2, 0.01, "not resting on the surface"), ("b", 0, 0.3, "outside the surface"),
+                                     ("c", 1, -1.5, "outside the view of cam")):
+        moved = {**objects[name], "position": list(objects[name]["position"])}
+        moved["position"][axis] += shift
+        bad = {**scene, "objects": [moved if o["name"] == name else o for o in scene["objects"]]}
+        assert any(words in problem for problem in check_scenes(program, [bad])), (name, words)
