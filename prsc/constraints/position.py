@@ -100,6 +100,10 @@ def specifier_rule(low: LoweringState, obj: ir.ObjectDecl, spec: ir.Specifier, s
         relaxed_options = (("completely", False), ("inside_asset", True), ("inside", rule.option("inside")))
         relaxed = _with_template(low, Rule(kind, label, spec.span, args, relaxed_options, None, None, values), support, me)
         rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
+    if kind == "stably":
+        # What the rejection baseline draws from: resting on X (the stack's rows are its test).
+        relaxed = _with_template(low, Rule("on", label, spec.span, args[:1], (), None, None, values[:1]), support, me)
+        rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
     return rule
 
 
