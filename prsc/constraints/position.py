@@ -114,6 +114,7 @@ def stack_below(low: LoweringState, target: ir.Expr) -> tuple[ir.Expr, ...]:
     while isinstance(target, ir.ObjectRef) and target.name not in seen and target.name in low.index_of:
         seen.add(target.name)
         decl = low.program.objects[low.index_of[target.name]]
+        _declared_mass(low, decl)
         below = next((s.target for s in decl.specifiers if isinstance(s, ir.StablyOn)), None)
         if not isinstance(below, ir.ObjectRef):
             break
@@ -123,11 +124,15 @@ def stack_below(low: LoweringState, target: ir.Expr) -> tuple[ir.Expr, ...]:
 
 
 def _declared_mass(low: LoweringState, obj: ir.ObjectDecl) -> tuple[tuple[str, Any], ...]:
-    """The object's constant `mass` as a rule option (none: density times its box volume)."""
+    """The object's `mass` as a rule option (none: density times its box volume); in a stack
+    it must be a constant, since the rows weigh the objects by it."""
+    expr = obj.prop("mass")
+    if expr is None:
+        return ()
     mass = low.facts.props.get(obj.name, {}).get("mass")
-    if isinstance(mass, (int, float)) and not isinstance(mass, bool) and mass > 0:
-        return (("mass", float(mass)),)
-    return ()
+    if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not mass > 0:
+        raise PrscError(f"{obj.name} stands in a `stably on` stack, so its mass must be a constant > 0", expr.span)
+    return (("mass", float(mass)),)
 
 
 def workspace_rule(low: LoweringState, obj: ir.ObjectDecl, workspace: ir.Expr, support: Support | None, me: ObjectValue) -> Rule:

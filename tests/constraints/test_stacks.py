@@ -5,8 +5,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from prsc.constraints.stacks import MARGIN
+from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
 from tests.sampling.scene_checks import check_scenes, quat_matrix
@@ -61,3 +63,11 @@ def test_a_plain_on_tower_overhangs_and_the_checker_says_so(tmp_path):
     assert max(_worst_overhang(s) for s in naive) > 1.2  # a bare `on` lets the tower lean out
     report = check_scenes(stable, naive)  # the stable spec's relations, on the naive draws
     assert any("centre of mass" in problem for problem in report), report
+
+
+def test_a_random_mass_in_a_stack_is_an_error_at_its_line(tmp_path):
+    spec = tmp_path / "random_mass.prs"
+    spec.write_text(TOWER.format(word="stably on").replace("with mass 0.2", "with mass (0.1, 0.3)"))
+    with pytest.raises(PrscError, match="its mass must be a constant") as caught:
+        Sampler(compile_program(str(spec), (str(REPO / "specs"),)), "exact").scene(0, 0)
+    assert caught.value.span is not None and caught.value.span.line == 5
