@@ -11,9 +11,9 @@ from prsc.constraints.values import ObjectValue, RegionValue, as_position
 from prsc.errors import PrscError, Span
 from prsc.geometry.boxes import Box
 from prsc.geometry.furniture import ASSET_SURFACES, asset_surfaces
-from prsc.ir.models import model_of
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.rotations import compat_euler_to_matrix
+from prsc.ir.models import model_of
 
 _PLANAR_TOL = 1e-9
 
@@ -160,8 +160,9 @@ def surface(target: Any, name: str, index: Any, span: Span | None) -> RegionValu
                         f"(known: {'; '.join(known)})", span)
     if isinstance(index, bool) or not isinstance(index, (int, float)) or index != int(index) \
             or not 0 <= index < len(found):
+        shown = f"{index:g}" if isinstance(index, float) else repr(index)
         raise PrscError(f"{target.name}.{name} has {len(found)} surfaces, indexed 0 to {len(found) - 1} "
-                        f"(0 the lowest), not {index!r}", span)
+                        f"(0 the lowest), not {shown}", span)
     board = found[int(index)]
     rot = target.rotation
     centre = target.position + rot @ np.asarray(board.centre)

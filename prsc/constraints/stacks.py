@@ -1,17 +1,17 @@
 """`stably on X`: a stack whose centres of mass stay over their supports, as exact rows.
 
-The object rests on X as with `on X` (its centre over X's top face). When X itself stands
-`stably on` Y, and so on down, the centre of mass of the object together with everything
-between it and each lower support must also lie over that support's top face: for the
-supports A_1 = Y, A_2, ... with the objects x_j between (masses m_j, centres p_j),
+The object rests on X as with `on X`, its centre over X's top face. When X itself stands
+`stably on` Y, and so on down, then for each lower support A_k (Y, what Y stands on, ...)
+the centre of mass of the object and the objects x_j between it and A_k (masses m_j,
+centres p_j),
 
-    (m p + sum_j m_j p_j) / (m + sum_j m_j)  over A_k's top face,
+    (m p + sum_j m_j p_j) / (m + sum_j m_j),
 
-over the contact between A_k and the object on it (the overlap of that object's footprint and
-A_k's top face): linear in p, so each support gives eight rows. A tower built this way stands under gravity on flat
-supports whatever order the scene's objects are drawn in (docs/language.md, "Stacks").
-Masses are the `mass` property where it is a constant, else density times box volume
-(centre of mass at the box centre, as for a uniform box).
+must lie over the contact between A_k and the object standing on it: the overlap of A_k's
+top face and that object's footprint. That is linear in p: eight rows per support. Every
+face is shrunk by MARGIN. A tower built this way stands under gravity on level supports
+(docs/language.md, "`stably on X`"). Masses are the constant `mass` property, else density
+times box volume, centres of mass the box centres (a uniform box).
 """
 
 from __future__ import annotations

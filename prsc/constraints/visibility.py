@@ -1,7 +1,7 @@
 """`visible from C`: the object's box inside camera C's view frustum, as exact rows.
 
 A box lies in a convex polytope exactly when every row holds at the box's support point:
-a . p + s(a) <= b (the same erosion as `completely in`). docs/language.md, "Visibility".
+a . p + s(a) <= b (the same erosion as `completely in`). docs/language.md, "`visible from C`".
 """
 
 from __future__ import annotations

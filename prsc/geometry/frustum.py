@@ -1,4 +1,4 @@
-"""A pinhole camera's view frustum as half-space rows (docs/language.md, "Visibility").
+"""A pinhole camera's view frustum as half-space rows (docs/language.md, "`visible from C`").
 
 The camera sits at its box centre and looks along its local +y, image up its local +z
 (as every backend writes it). The frustum is the convex polytope between the near plane

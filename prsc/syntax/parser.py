@@ -31,7 +31,7 @@ _WORDS = {
 _EXPRESSION_START = {"NAME", "NUMBER", "STRING", "LPAR", "LSQB", "LBRACE", "MINUS", "PLUS", "NOT",
                      "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT"}
 _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AHEAD", "BEHIND", "ABOVE",
-                    "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE"}
+                    "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE", "STABLY", "VISIBLE", "NOT"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "LSQB", "DEG", "_RELATIVE", "_AND",
               "_OR"}
 # A spec is a page of text. This bounds parse time and memory: lark's LALR parser is

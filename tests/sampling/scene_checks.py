@@ -704,7 +704,7 @@ def _mass(body: Body) -> float:
 
 
 def _centre_of_mass_supported(ev: Evaluator, body: Body, spec: ir.StablyOn) -> str | None:
-    """docs/language.md "Stacks": for each support under the target (X stably on Y, ...), the
+    """docs/language.md "`stably on X`": for each support under the target (X stably on Y, ...), the
     centre of mass of the body and the objects between lies over that support's top face and
     the footprint of the object standing on it."""
     decls = {d.name: d for d in ev.program.objects}
@@ -728,7 +728,7 @@ def _centre_of_mass_supported(ev: Evaluator, body: Body, spec: ir.StablyOn) -> s
 
 
 def _outside_view(camera: Body, body: Body) -> str | None:
-    """docs/language.md "Visibility": every corner in front of the camera's box, within the far
+    """docs/language.md "`visible from C`": every corner in front of the camera's box, within the far
     plane (the camera's `far`, else 3 m) and inside the image's edges (fovy, resolution)."""
     info = camera.data.get("camera")
     if not info:

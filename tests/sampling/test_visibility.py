@@ -1,6 +1,6 @@
 """`visible from C`: every box inside the camera's view frustum, and uniform on that set.
 
-The frustum is written out here from docs/language.md "Visibility" (near plane at the front
+The frustum is written out here from docs/language.md "`visible from C`" (near plane at the front
 of the camera's box, far plane 3 m, fovy and resolution), apart from prsc's code; the scene
 checker tests containment with its own copy. Uniformity: chi-square over cells of the
 table (p > 0.001, fixed seeds) against a Monte Carlo count of uniform points tested against
