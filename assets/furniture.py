@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from prsc.assets.parts import Part, box
+from prsc.geometry.furniture import SHELF_BOARDS, shelf_layout
 
 
 def chair_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
@@ -21,16 +22,17 @@ def chair_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
     return tuple(parts)
 
 
-def shelf_parts(dimensions: tuple[float, float, float], boards: int = 4) -> tuple[Part, ...]:
-    """A bookshelf open towards +y: two sides, a back panel and `boards` evenly spaced boards."""
-    w, l, h = dimensions
-    t = min(max(0.025 * min(w, l), 0.012), 0.03, 0.2 * min(w, l))
+def shelf_parts(dimensions: tuple[float, float, float], boards: int = SHELF_BOARDS) -> tuple[Part, ...]:
+    """A bookshelf open towards +y: two sides, a back panel and `boards` evenly spaced boards
+    (prsc.geometry.furniture.shelf_layout: the same numbers `on shelf.boards[k]` rests on)."""
+    layout = shelf_layout(dimensions, boards)
+    w, l, h = layout.dimensions
+    t = layout.thickness
     parts = [
         box("side_left", (t, l, h), (-w / 2 + t / 2, 0.0, 0.0)),
         box("side_right", (t, l, h), (w / 2 - t / 2, 0.0, 0.0)),
         box("back", (w - 2 * t, t, h), (0.0, -l / 2 + t / 2, 0.0)),
     ]
-    for k in range(boards):
-        z = -h / 2 + t / 2 + k * (h - t) / (boards - 1)
+    for k, z in enumerate(layout.board_z):
         parts.append(box(f"board_{k}", (w - 2 * t, l - t, t), (0.0, t / 2, z)))
     return tuple(parts)

@@ -10,7 +10,9 @@ from prsc.constraints import specifiers as rows
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import Rule
 from prsc.constraints.reach import rows_reachable
+from prsc.constraints.stacks import DENSITY, rows_stably
 from prsc.constraints.support import Support
+from prsc.constraints.visibility import rows_visible
 from prsc.geometry.polytope import Polytope
 
 Builder = Callable[[Rule, list[Any], Support], Polytope]
@@ -28,7 +30,10 @@ BUILDERS: dict[str, Builder] = {
     "at": lambda r, v, s: rows.rows_at(v[0], r.label_id, r.span),
     "beyond": lambda r, v, s: rows.rows_beyond(v[0], v[1], v[2], r.label_id, r.span),
     "in": lambda r, v, s: rows.rows_in(v[0], r.option("completely"), s, r.label_id, r.span),
-    "on": lambda r, v, s: rows.rows_on(v[0], r.option("completely"), s, r.label_id, r.span, bool(r.option("inside_asset"))),
+    "on": lambda r, v, s: rows.rows_on(v[0], r.option("completely"), s, r.label_id, r.span, bool(r.option("inside_asset")),
+                                       bool(r.option("inside"))),
+    "stably": lambda r, v, s: rows_stably(v, r.option("mass") or DENSITY * 8 * float(np.prod(s.half)), s, r.label_id, r.span),
+    "visible": lambda r, v, s: rows_visible(v[0], s, r.label_id, r.span),
     "direction": lambda r, v, s: rows.rows_direction(r.option("relation"), v[0], v[1] if len(v) > 1 else None, s, r.label_id, r.span,
                                                      v[2] if len(v) > 2 else None),
     "aligned": lambda r, v, s: rows.rows_aligned(v[0], r.option("axis"), r.label_id, r.span),

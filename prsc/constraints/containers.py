@@ -35,13 +35,21 @@ def is_container_asset(low: LoweringState, name: str) -> bool:
 
 
 def containers_rested_in(low: LoweringState, obj: ir.ObjectDecl) -> tuple[int, ...]:
-    """Indices of the containers the object is placed `on` (it rests on their floors): those
-    declaring an interior, and for `completely on` container assets too (specifiers.interior_of)."""
+    """Indices of the containers the object is placed `on` or `in` (it rests on their floors): those
+    declaring an interior, for `completely on` and `in` container assets too (specifiers.interior_of),
+    and furniture whose support surface (`shelf.boards[k]`) it stands on."""
     found = []
     for spec in obj.specifiers:
-        if not (isinstance(spec, ir.On) and isinstance(spec.target, ir.ObjectRef)):
+        target = getattr(spec, "target", None)
+        if isinstance(spec, (ir.On, ir.StablyOn)) and isinstance(target, ir.SurfaceRef) \
+                and isinstance(target.target, ir.ObjectRef):
+            # On a furniture surface (a shelf's board): inside the furniture's box, bounded by its parts.
+            found.append(low.index_of[target.target.name])
             continue
-        name = spec.target.name
-        if declares_interior(low, name) or (spec.completely and is_container_asset(low, name)):
+        if not (isinstance(spec, (ir.On, ir.StablyOn)) and isinstance(target, ir.ObjectRef)):
+            continue
+        name = target.name
+        inside = isinstance(spec, ir.On) and (spec.completely or spec.inside)
+        if declares_interior(low, name) or (inside and is_container_asset(low, name)):
             found.append(low.index_of[name])
     return tuple(sorted(set(found)))

@@ -292,6 +292,13 @@ class ExprCompiler:
         draw = sampler_for(e, [a.fn for a in args], [w.fn for w in weights])
         return Compiled(_once_per_scene(draw, e.draw_id, _DRAWS, SceneContext.remember_draw), False)
 
+    def _c_SurfaceRef(self, e: ir.SurfaceRef) -> Compiled:
+        target, index, name, span = self.compile(e.target), self.compile(e.index), e.name, e.span
+        if target.const and index.const:
+            return constant(regions.surface(target.value, name, index.value, span))
+        tf, xf = target.fn, index.fn
+        return Compiled(lambda ctx: regions.surface(tf(ctx), name, xf(ctx), span), False)
+
     def _c_RegionExpr(self, e: ir.RegionExpr) -> Compiled:
         names = [name for name, _ in e.args]
         args = [self.compile(a) for _, a in e.args]

@@ -77,7 +77,7 @@ class Rule:
     template: RowTemplate | None = None
     soft: int | None = None
     values: tuple[Evaluator, ...] = field(default=(), repr=False, compare=False)
-    # `completely on X`: the same rule without erosion (what the rejection baseline draws from).
+    # `completely on X`: the same rule without erosion; `stably on X`: `on X` (what the rejection baseline draws from).
     relaxed: Rule | None = None
 
     def option(self, name: str, default: Any = None) -> Any:

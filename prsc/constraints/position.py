@@ -21,7 +21,7 @@ from prsc.ir import model as ir
 def _cause(spec: ir.Specifier) -> str:
     if isinstance(spec, (ir.Direction, ir.AlignedWith)):
         return RELATIVE
-    if isinstance(spec, (ir.In, ir.On, ir.ReachableBy)):
+    if isinstance(spec, (ir.In, ir.On, ir.ReachableBy, ir.StablyOn, ir.VisibleFrom)):
         return CONTAINMENT
     return POSITION
 
@@ -39,7 +39,12 @@ def _kind_args_options(spec: ir.Specifier) -> tuple[str, tuple[ir.Expr, ...], tu
     if isinstance(spec, ir.On):
         # inside_asset: `completely on` a container asset that declares no interior means
         # inside it (specifiers.interior_of); the relaxed rule of the baseline keeps that.
-        return "on", (spec.target,), (("completely", spec.completely), ("inside_asset", spec.completely))
+        return "on", (spec.target,), (("completely", spec.completely), ("inside_asset", spec.completely),
+                                      ("inside", spec.inside))
+    if isinstance(spec, ir.StablyOn):
+        return "stably", (spec.target,), ()
+    if isinstance(spec, ir.VisibleFrom):
+        return "visible", (spec.camera,), ()
     if isinstance(spec, ir.Direction):
         if spec.relation not in rows.DIRECTION_AXES:
             raise PrscError(f"unknown direction {spec.relation!r}", spec.span)
@@ -85,6 +90,8 @@ def specifier_rule(low: LoweringState, obj: ir.ObjectDecl, spec: ir.Specifier, s
     if "position" not in spec.sets:
         return None
     kind, args, options = _kind_args_options(spec)
+    if kind == "stably":
+        args, options = args + stack_below(low, args[0]), _declared_mass(low, obj)
     refs: set[str] = set()
     for arg in args:
         refs |= mentioned_objects(arg)
@@ -92,10 +99,42 @@ def specifier_rule(low: LoweringState, obj: ir.ObjectDecl, spec: ir.Specifier, s
     values = tuple(low.compiler.compile(arg).fn for arg in args)
     rule = _with_template(low, Rule(kind, label, spec.span, args, options, None, None, values), support, me)
     if kind == "on" and rule.option("completely"):
-        relaxed_options = (("completely", False), ("inside_asset", True))
+        relaxed_options = (("completely", False), ("inside_asset", True), ("inside", rule.option("inside")))
         relaxed = _with_template(low, Rule(kind, label, spec.span, args, relaxed_options, None, None, values), support, me)
         rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
+    if kind == "stably":
+        # What the rejection baseline draws from: resting on X (the stack's rows are its test).
+        relaxed = _with_template(low, Rule("on", label, spec.span, args[:1], (), None, None, values[:1]), support, me)
+        rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
     return rule
+
+
+def stack_below(low: LoweringState, target: ir.Expr) -> tuple[ir.Expr, ...]:
+    """The supports under a `stably on X` target: what X stands `stably on`, what that stands on, ..."""
+    chain: list[ir.Expr] = []
+    seen: set[str] = set()
+    while isinstance(target, ir.ObjectRef) and target.name not in seen and target.name in low.index_of:
+        seen.add(target.name)
+        decl = low.program.objects[low.index_of[target.name]]
+        _declared_mass(low, decl)
+        below = next((s.target for s in decl.specifiers if isinstance(s, ir.StablyOn)), None)
+        if not isinstance(below, ir.ObjectRef):
+            break
+        chain.append(below)
+        target = below
+    return tuple(chain)
+
+
+def _declared_mass(low: LoweringState, obj: ir.ObjectDecl) -> tuple[tuple[str, Any], ...]:
+    """The object's `mass` as a rule option (none: density times its box volume); in a stack
+    it must be a constant, since the rows weigh the objects by it."""
+    expr = obj.prop("mass")
+    if expr is None:
+        return ()
+    mass = low.facts.props.get(obj.name, {}).get("mass")
+    if isinstance(mass, bool) or not isinstance(mass, (int, float)) or not mass > 0:
+        raise PrscError(f"{obj.name} stands in a `stably on` stack, so its mass must be a constant > 0", expr.span)
+    return (("mass", float(mass)),)
 
 
 def workspace_rule(low: LoweringState, obj: ir.ObjectDecl, workspace: ir.Expr, support: Support | None, me: ObjectValue) -> Rule:

@@ -7,11 +7,13 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from prsc.constraints.values import RegionValue, as_position
+from prsc.constraints.values import ObjectValue, RegionValue, as_position
 from prsc.errors import PrscError, Span
 from prsc.geometry.boxes import Box
+from prsc.geometry.furniture import ASSET_SURFACES, asset_surfaces
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.rotations import compat_euler_to_matrix
+from prsc.ir.models import model_of
 
 _PLANAR_TOL = 1e-9
 
@@ -143,3 +145,26 @@ def intersection(regions: Sequence[Any], span: Span | None) -> RegionValue:
         raise PrscError("Intersection needs one or more regions", span)
     normal = next((r.normal for r in members if r.normal is not None), None)
     return RegionValue("intersection", intersect(*(r.poly for r in members)), normal)
+
+
+def surface(target: Any, name: str, index: Any, span: Span | None) -> RegionValue:
+    """`X.name[k]`: support surface k of X's furniture asset, as a rectangle moved to X's pose
+    (prsc.geometry.furniture, the numbers the asset recipe builds)."""
+    if not isinstance(target, ObjectValue) or target.position is None or target.rotation is None or target.dims is None:
+        raise PrscError(f"{name}[...] needs a placed object", span)
+    model = model_of(target.props, target.class_name)
+    found = asset_surfaces(model, name, target.dims)
+    if found is None:
+        known = [f"{m}: {', '.join(s)}" for m, s in ASSET_SURFACES.items()]
+        raise PrscError(f"{target.name}'s model {model!r} has no support surfaces {name!r} "
+                        f"(known: {'; '.join(known)})", span)
+    if isinstance(index, bool) or not isinstance(index, (int, float)) or index != int(index) \
+            or not 0 <= index < len(found):
+        shown = f"{index:g}" if isinstance(index, float) else repr(index)
+        raise PrscError(f"{target.name}.{name} has {len(found)} surfaces, indexed 0 to {len(found) - 1} "
+                        f"(0 the lowest), not {shown}", span)
+    board = found[int(index)]
+    rot = target.rotation
+    centre = target.position + rot @ np.asarray(board.centre)
+    poly = Polytope.from_rectangle(centre, rot, board.width, board.length)
+    return RegionValue("rectangle", poly, up_normal(rot[:, 2]), board.clearance)

@@ -91,14 +91,20 @@ def rows_in(region: Any, completely: bool, support: Support, label: int, span: S
 
 
 def rows_on(target: Any, completely: bool, support: Support, label: int, span: Span | None,
-            inside_asset: bool = False) -> Polytope:
+            inside_asset: bool = False, inside: bool = False) -> Polytope:
     """`[completely] on X` for an object, a planar region or a point (`inside_asset`: on the
-    floor of a container asset that declares no interior, as `completely on` asks)."""
+    floor of a container asset that declares no interior, as `completely on` asks; `inside`:
+    written `in X`, which needs X to be a container)."""
     if isinstance(target, ObjectValue):
         pos, rot, dims = _placed(target, span)
-        interior = interior_of(target, span, inside_asset)
+        interior = interior_of(target, span, inside_asset or inside)
         if interior is not None:
             return _rows_in_container(pos, rot, interior, completely, support, label)
+        if inside:
+            word = "completely in" if completely else "in"
+            raise PrscError(f"`{word} {target.name}` needs a container (a class declaring {', '.join(INTERIOR_PROPERTIES)}, "
+                            f"or a container asset), and {target.name} is none: to rest on its top write "
+                            f"`{'completely on' if completely else 'on'} {target.name}`, for a solid region `in Cuboid(...)`", span)
         u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
         top = pos + n * (dims[2] * 0.5)
         s = support(np.stack([n, u, v]))
@@ -163,6 +169,9 @@ def _rows_on_surface(region: RegionValue, completely: bool, support: Support, la
     if offset is None:
         raise PrscError("'on' needs a planar region", span)
     sn = float(support(n[None, :])[0])
+    if region.clearance is not None and 2 * sn > region.clearance + 1e-9:
+        raise PrscError(f"the object ({2 * sn:.3f} m tall) does not fit under the next board "
+                        f"({region.clearance:.3f} m free above this one)", span)
     a = poly.A
     # Project p back onto the plane: p_proj = p - s(n) n, so a.p_proj <= b  <=>  a.p <= b + s(n) a.n.
     b = poly.b + sn * (a @ n)

@@ -98,6 +98,8 @@ class RegionValue:
     kind: str
     poly: Polytope
     normal: Vector | None = None
+    # A furniture surface's free height above the plane (the next board), None: open above.
+    clearance: float | None = None
 
     @property
     def planar(self) -> bool:

@@ -19,6 +19,13 @@ POINT_TYPES = frozenset({T.VECTOR, T.ORIENTED_POINT})
 LOCATED_TYPES = frozenset({T.OBJECT, T.VECTOR, T.ORIENTED_POINT})
 
 
+def declared_surfaces(cls: ClassInfo) -> tuple[str, ...]:
+    """The support-surface lists a class declares: `surfaces: ["boards"]` (constant strings)."""
+    default = cls.default("surfaces")
+    items = default.items if isinstance(default, ir.ListExpr) else (default,) if default is not None else ()
+    return tuple(str(i.value) for i in items if isinstance(i, ir.Const) and i.type == T.STRING)
+
+
 def type_words(types) -> str:
     """A set of types in words: 'a vector or an object'."""
     words = []
@@ -144,8 +151,11 @@ class ExprResolver:
                 return ir.PropertyRef(span, _builtin_read_type(prop), target, prop)
             if prop in ("x", "y", "z") or cls.has(prop):
                 return ir.PropertyRef(span, cls.value_type(prop), target, prop)
+            if prop in declared_surfaces(cls):
+                raise PrscError(f"{prop} is a list of support surfaces: pick one by its index, "
+                                f"as in {_object_words(target, cls)}.{prop}[0] (the lowest)", prop_span)
             raise PrscError(f"unknown property '{prop}' of {_object_words(target, cls)}"
-                            f"{did_you_mean(prop, [*cls.properties(), 'x', 'y', 'z'])}", prop_span)
+                            f"{did_you_mean(prop, [*cls.properties(), 'x', 'y', 'z', *declared_surfaces(cls)])}", prop_span)
         if target.type == T.VECTOR:
             if prop in ("x", "y", "z"):
                 return ir.PropertyRef(span, T.SCALAR, target, prop)
@@ -161,6 +171,18 @@ class ExprResolver:
         if target.type == T.ANY:
             return ir.PropertyRef(span, T.ANY, target, prop)
         raise PrscError(f"{article(target.type)} has no property '{prop}'", prop_span)
+
+    def _Index(self, e: nodes.Index) -> ir.Expr:
+        attr = e.target
+        if isinstance(attr, nodes.Attribute):
+            target = self.resolve(attr.target)
+            cls = self._object_class(target) if target.type == T.OBJECT else None
+            if cls is not None and attr.name in declared_surfaces(cls) and not cls.has(attr.name):
+                index = expect(self.resolve(e.index), {T.SCALAR}, f"the index of {attr.name}")
+                return ir.SurfaceRef(e.span, T.REGION, target, attr.name, index)
+        self.resolve(attr)  # an unknown property is that error, at its name
+        raise PrscError("only a support-surface list can be indexed, as in shelf.boards[1] "
+                        "(a class lists its surfaces in `surfaces`)", e.span)
 
     def _object_class(self, target: ir.Expr) -> ClassInfo | None:
         if isinstance(target, ir.ObjectRef) and target.name in self.scope.objects:

@@ -91,6 +91,8 @@ def format_expr(expr: ir.Expr) -> str:
             items = ", ".join(f"{format_expr(v)}: {format_expr(w)}" for v, w in zip(expr.args, expr.weights))
             return f"Discrete({{{items}}})"
         return f"{_DISTRIBUTION_NAMES[expr.kind]}(" + ", ".join(format_expr(a) for a in expr.args) + ")"
+    if isinstance(expr, ir.SurfaceRef):
+        return f"{_wrap(expr.target, 10)}.{expr.name}[{format_expr(expr.index)}]"
     if isinstance(expr, ir.RegionExpr):
         args = ", ".join(f"{k}={format_expr(v)}" for k, v in expr.args)
         return f"{_REGION_NAMES.get(expr.kind, expr.kind)}({args})"
@@ -111,7 +113,11 @@ def format_specifier(spec: ir.Specifier) -> str:
     if isinstance(spec, ir.In):
         return f"{'completely ' if spec.completely else ''}in {_arg(spec.region)}"
     if isinstance(spec, ir.On):
-        return f"{'completely ' if spec.completely else ''}on {_arg(spec.target)}"
+        return f"{'completely ' if spec.completely else ''}{'in' if spec.inside else 'on'} {_arg(spec.target)}"
+    if isinstance(spec, ir.StablyOn):
+        return f"stably on {_arg(spec.target)}"
+    if isinstance(spec, ir.VisibleFrom):
+        return f"visible from {_arg(spec.camera)}"
     if isinstance(spec, ir.Direction):
         word = DIRECTION_PHRASES.get(spec.relation, spec.relation)
         by = f" by {_arg(spec.by)}" if spec.by is not None else ""

@@ -191,6 +191,16 @@ class RegionExpr(Expr):
         return dict(self.args)[name]
 
 
+@dataclass(frozen=True)
+class SurfaceRef(Expr):
+    """`X.name[index]`: support surface `index` of the list `name` that X's class declares
+    in its `surfaces` (docs/language.md, "Support surfaces"); a planar region."""
+
+    target: Expr
+    name: str
+    index: Expr
+
+
 # ---------------------------------------------------------------- specifiers
 
 
@@ -241,10 +251,14 @@ class In(Specifier):
 
 @dataclass(frozen=True)
 class On(Specifier):
-    """`[completely] on X`, X an object, a planar region or a vector/point."""
+    """`[completely] on X`, X an object, a planar region or a vector/point.
+
+    `inside`: written `[completely] in X` for an object X, which means X's container interior.
+    """
 
     target: Expr
     completely: bool
+    inside: bool = field(default=False, kw_only=True)
 
 
 @dataclass(frozen=True)
@@ -287,6 +301,21 @@ class ReachableBy(Specifier):
     """`reachable by R`: the centre inside robot R's top-down reachable set (docs/sampling.md)."""
 
     robot: Expr
+
+
+@dataclass(frozen=True)
+class StablyOn(Specifier):
+    """`stably on X`: on X, with the centre of mass of everything stacked over each support
+    (X, what X stands stably on, ...) over that support's top face (docs/language.md)."""
+
+    target: Expr
+
+
+@dataclass(frozen=True)
+class VisibleFrom(Specifier):
+    """`visible from C`: the box inside camera C's view frustum (docs/language.md)."""
+
+    camera: Expr
 
 
 # ---------------------------------------------------------------- program

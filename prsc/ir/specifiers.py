@@ -77,6 +77,10 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
         return ir.At(span, POSITION, (), point)
     if isinstance(spec, nodes.InSpec):
         region = r(spec.region)
+        if region.type == T.OBJECT:
+            # `in X` for an object: X's container interior, as `on X` rests on its floor
+            # (constraints/specifiers.interior_of; an object with no interior is an error there).
+            return ir.On(span, POSITION, BOX_READS, region, spec.completely, inside=True)
         if region.type not in (T.REGION, T.ANY):
             raise PrscError(f"`in` needs a region, not {article(region.type)}", region.span)
         reads = BOX_READS if spec.completely else ()
@@ -132,6 +136,20 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
         if robot.type not in (T.OBJECT, T.ANY):
             raise PrscError(f"`reachable by` needs a robot object, not {article(robot.type)}", robot.span)
         return ir.ReachableBy(span, POSITION, (), robot)
+    if isinstance(spec, nodes.StablySpec):
+        target = r(spec.target)
+        if target.type not in (T.OBJECT, T.REGION, T.ANY):
+            raise PrscError(f"`stably on` needs an object or a planar region, not {article(target.type)}", target.span)
+        return ir.StablyOn(span, POSITION, BOX_READS, target)
+    if isinstance(spec, nodes.VisibleSpec):
+        if spec.negated:
+            raise PrscError("`not visible from C` is not supported: the outside of a view frustum is a union "
+                            "of half-spaces, not a convex set, so prsc cannot sample it exactly. Place the "
+                            "object by a side instead, e.g. `behind C` or `left of C by d`", span)
+        camera = r(spec.camera)
+        if camera.type not in (T.OBJECT, T.ANY):
+            raise PrscError(f"`visible from` needs a camera object, not {article(camera.type)}", camera.span)
+        return ir.VisibleFrom(span, POSITION, BOX_READS, camera)
     raise PrscError("unknown specifier", span)  # pragma: no cover
 
 

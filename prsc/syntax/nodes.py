@@ -64,6 +64,14 @@ class Attribute(Expr):
 
 
 @dataclass(frozen=True)
+class Index(Expr):
+    """`target[index]` (a support surface of a list, as in `shelf.boards[1]`)."""
+
+    target: Expr
+    index: Expr
+
+
+@dataclass(frozen=True)
 class Call(Expr):
     """`func(arg, ...)`."""
 
@@ -244,6 +252,21 @@ class ReachableSpec(Specifier):
     """`reachable by robot`."""
 
     robot: Expr
+
+
+@dataclass(frozen=True)
+class StablySpec(Specifier):
+    """`stably on target`."""
+
+    target: Expr
+
+
+@dataclass(frozen=True)
+class VisibleSpec(Specifier):
+    """`[not] visible from camera`."""
+
+    camera: Expr
+    negated: bool
 
 
 # ---------------------------------------------------------------- statements

@@ -31,8 +31,8 @@ _WORDS = {
 _EXPRESSION_START = {"NAME", "NUMBER", "STRING", "LPAR", "LSQB", "LBRACE", "MINUS", "PLUS", "NOT",
                      "TRUE", "FALSE", "TOP", "BOTTOM", "FRONT", "BACK", "LEFT", "RIGHT", "DISTANCE"}
 _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AHEAD", "BEHIND", "ABOVE",
-                    "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE"}
-_OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "DEG", "_RELATIVE", "_AND",
+                    "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE", "STABLY", "VISIBLE", "NOT"}
+_OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "LSQB", "DEG", "_RELATIVE", "_AND",
               "_OR"}
 # A spec is a page of text. This bounds parse time and memory: lark's LALR parser is
 # linear but takes ~30 us and ~0.7 kB per token, so 256 KiB of `1+1+...` parses in ~8 s.

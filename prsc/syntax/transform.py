@@ -168,6 +168,12 @@ class ToAst(Transformer):
     def reachable_spec(self, meta, children):
         return n.ReachableSpec(self._span(meta), children[-1])
 
+    def stably_spec(self, meta, children):
+        return n.StablySpec(self._span(meta), children[-1])
+
+    def visible_spec(self, meta, children):
+        return n.VisibleSpec(self._span(meta), children[-1], children[0] is not None)
+
     # ------------------------------------------------------------ expressions
 
     def _chain(self, meta, children, make):
@@ -223,6 +229,10 @@ class ToAst(Transformer):
     def attribute(self, meta, children):
         target, name = children
         return n.Attribute(self._span(meta), target, str(name), self._tok(name))
+
+    def index(self, meta, children):
+        target, index = self._exprs(children)
+        return n.Index(self._span(meta), target, index)
 
     def call(self, meta, children):
         func = children[0]

@@ -164,6 +164,7 @@ class Box:
     r: np.ndarray
     dims: np.ndarray
     planar: bool = False
+    clearance: float | None = None  # a furniture board: free height above it
 
 
 @dataclass(frozen=True)
@@ -260,6 +261,11 @@ class Evaluator:
             raise Unknown(f"a {e.kind} distribution")
         if isinstance(e, ir.RegionExpr):
             return self.region(e)
+        if isinstance(e, ir.SurfaceRef):
+            index = self.num(self.ev(e.index))
+            if float(index.lo) != float(index.hi):
+                raise Unknown("a random surface index")
+            return furniture_surface(self.ev(e.target), e.name, int(index.lo))
         raise Unknown(type(e).__name__)
 
     def num(self, v: Any) -> Iv:
@@ -416,7 +422,14 @@ def check_scene(program: ir.Program, scene: dict) -> SceneCheck:
         frozenset((decl.name, spec.target.name))
         for decl in program.objects for spec in decl.specifiers
         if isinstance(spec, ir.On) and isinstance(spec.target, ir.ObjectRef)
-        and container_interior(bodies[spec.target.name], spec.completely) is not None
+        and container_interior(bodies[spec.target.name], spec.completely or getattr(spec, "inside", False)) is not None
+    }
+    # An object on a furniture board stands inside the furniture's box, between its parts.
+    inside |= {
+        frozenset((decl.name, spec.target.target.name))
+        for decl in program.objects for spec in decl.specifiers
+        if isinstance(spec, (ir.On, ir.StablyOn)) and isinstance(spec.target, ir.SurfaceRef)
+        and isinstance(spec.target.target, ir.ObjectRef)
     }
     items = list(bodies.values())
     for i, a in enumerate(items):
@@ -506,9 +519,28 @@ def container_interior(target: Body, completely: bool = False) -> tuple[float, l
     return -h / 2 + min(float(props["floorThickness"]), h / 2), edges
 
 
-def _on_floor(body: Body, target: Body, completely: bool) -> str | None:
+def furniture_surface(target: Any, name: str, index: int) -> Box:
+    """Board `index` of a shelf (or a table's top), from docs/language.md "Support surfaces":
+    panels of thickness t = 2.5% of the short side in [12 mm, 30 mm] (at most 20% of it), four
+    boards with centres at -h/2 + t/2 + k (h - t) / 3, each between the sides and in front of the back."""
+    if not isinstance(target, Body):
+        raise Unknown("a surface of a non-object")
+    w, l, h = (float(v) for v in target.dims)
+    model = target.data.get("model")
+    if model == "table" and name == "tabletop" and index == 0:
+        return Box(target.p + target.r @ np.array([0.0, 0.0, h / 2]), target.r, np.array([w, l, 0.0]), True)
+    if model != "shelf" or name != "boards":
+        raise Unknown(f"surface {name} of model {model}")
+    t = min(max(0.025 * min(w, l), 0.012), 0.03, 0.2 * min(w, l))
+    centres = [-h / 2 + t / 2 + k * (h - t) / 3 for k in range(4)]
+    top = centres[index] + t / 2
+    clearance = centres[index + 1] - t / 2 - top if index < 3 else None
+    return Box(target.p + target.r @ np.array([0.0, t / 2, top]), target.r, np.array([w - 2 * t, l - t, 0.0]), True, clearance)
+
+
+def _on_floor(body: Body, target: Body, completely: bool, inside: bool = False) -> str | None:
     """`on X` for a container X: resting on its floor, centre (footprint) inside its walls."""
-    floor_top, edges = container_interior(target, completely)  # type: ignore[misc]
+    floor_top, edges = container_interior(target, completely or inside)  # type: ignore[misc]
     n = target.r[:, 2]
     gap = float(n @ (body.p - target.p)) - floor_top - body.s(n)
     if abs(gap) > TOL:
@@ -528,10 +560,21 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         if np.any(p < v.lo - TOL) or np.any(p > v.hi + TOL):
             return f"position {p} not at {v.lo}..{v.hi}"
         return None
+    if isinstance(spec, ir.StablyOn):
+        problem = _check_specifier(ev, body, ir.On(spec.span, spec.sets, spec.reads, spec.target, False))
+        return problem or _centre_of_mass_supported(ev, body, spec)
+    if isinstance(spec, ir.VisibleFrom):
+        camera = ev.ev(spec.camera)
+        if not isinstance(camera, Body):
+            raise Unknown("visible from a non-object")
+        return _outside_view(camera, body)
     if isinstance(spec, ir.On):
         target = ev.ev(spec.target)
-        if isinstance(target, Body) and container_interior(target, spec.completely) is not None:
-            return _on_floor(body, target, spec.completely)
+        inside = getattr(spec, "inside", False)
+        if isinstance(target, Body) and container_interior(target, spec.completely or inside) is not None:
+            return _on_floor(body, target, spec.completely, inside)
+        if isinstance(target, Body) and inside:
+            return f"{target.name} is no container"
         if isinstance(target, Body):
             n, u, v = target.r[:, 2], target.r[:, 0], target.r[:, 1]
             top = target.p + n * target.dims[2] / 2
@@ -555,6 +598,8 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
                 limit = target.dims[i] / 2 - (body.s(axis) if spec.completely else 0.0)
                 if abs(local[i]) > limit + TOL:
                     return "outside the surface"
+            if target.clearance is not None and 2 * body.s(n) > target.clearance + TOL:
+                return "taller than the free height above the board"
             return None
         point = ev.vec(target if isinstance(target, Iv) else Iv.exact(target.p))
         want = point + Iv.exact(np.array([0.0, 0.0, body.s(np.array([0.0, 0.0, 1.0]))]))
@@ -661,6 +706,52 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
             raise Unknown("reachable by a non-object")
         return _outside_reach(robot, p)
     raise Unknown(f"the checker has no test for {type(spec).__name__}")
+
+
+def _mass(body: Body) -> float:
+    """The scene JSON's mass (the centre of mass taken at the box centre)."""
+    return float(body.data["mass"])
+
+
+def _centre_of_mass_supported(ev: Evaluator, body: Body, spec: ir.StablyOn) -> str | None:
+    """docs/language.md "`stably on X`": for each support under the target (X stably on Y, ...), the
+    centre of mass of the body and the objects between lies over that support's top face and
+    the footprint of the object standing on it."""
+    decls = {d.name: d for d in ev.program.objects}
+    carried = [body]
+    target = spec.target
+    while isinstance(target, ir.ObjectRef) and len(carried) <= len(decls):
+        above = ev.bodies[target.name]
+        carried.append(above)
+        below = next((s.target for s in decls[target.name].specifiers if isinstance(s, ir.StablyOn)), None)
+        if not isinstance(below, ir.ObjectRef):
+            return None
+        support = ev.bodies[below.name]
+        masses = np.array([_mass(b) for b in carried])
+        com = (masses[:, None] * np.array([b.p for b in carried])).sum(axis=0) / masses.sum()
+        for face in (support, above):  # over the contact: below's top face and above's footprint
+            local = face.r.T @ (com - face.p)
+            if abs(local[0]) > face.dims[0] / 2 + TOL or abs(local[1]) > face.dims[1] / 2 + TOL:
+                return f"the centre of mass over {below.name} lies outside its contact with {above.name}"
+        target = below
+    return None
+
+
+def _outside_view(camera: Body, body: Body) -> str | None:
+    """docs/language.md "`visible from C`": every corner in front of the camera's box, within the far
+    plane (the camera's `far`, else 3 m) and inside the image's edges (fovy, resolution)."""
+    info = camera.data.get("camera")
+    if not info:
+        raise Unknown(f"{camera.name} is not a camera")
+    far = float(camera.data.get("properties", {}).get("far", 3.0))
+    tan_z = math.tan(math.radians(float(info["fovy"])) / 2)
+    width, height = info["resolution"]
+    tan_x = tan_z * width / height
+    local = (body.corners() - camera.p) @ camera.r
+    x, y, z = local[:, 0], local[:, 1], local[:, 2]
+    worst = max(float((camera.dims[1] / 2 - y).max()), float((y - far).max()),
+                float((np.abs(x) - y * tan_x).max()), float((np.abs(z) - y * tan_z).max()))
+    return None if worst <= TOL else f"outside the view of {camera.name} by {worst:.3g}"
 
 
 REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints"
