@@ -10,10 +10,11 @@ from prsc.constraints import specifiers as rows
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import Rule
 from prsc.constraints.reach import rows_reachable
-from prsc.constraints.stacks import DENSITY, rows_stably
+from prsc.constraints.stacks import rows_stably
 from prsc.constraints.support import Support
 from prsc.constraints.visibility import rows_visible
 from prsc.geometry.polytope import Polytope
+from prsc.ir.builtins import DENSITY
 
 Builder = Callable[[Rule, list[Any], Support], Polytope]
 

@@ -12,6 +12,7 @@ from prsc.errors import PrscError
 from prsc.geometry.container import ASSET_INTERIORS, PROPERTIES
 from prsc.ir.models import model_of
 from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl
 
 
 def declares_interior(low: LoweringState, name: str) -> bool:
@@ -34,7 +35,7 @@ def is_container_asset(low: LoweringState, name: str) -> bool:
     return model_of(low.facts.props.get(name, {}), decl.class_name) in ASSET_INTERIORS
 
 
-def containers_rested_in(low: LoweringState, obj: ir.ObjectDecl) -> tuple[int, ...]:
+def containers_rested_in(low: LoweringState, obj: ObjectDecl) -> tuple[int, ...]:
     """Indices of the containers the object is placed `on` or `in` (it rests on their floors): those
     declaring an interior, for `completely on` and `in` container assets too (specifiers.interior_of),
     and furniture whose support surface (`shelf.boards[k]`) it stands on."""

@@ -25,6 +25,7 @@ from prsc.constraints.operations import (
 from prsc.constraints.values import ObjectValue, RegionValue
 from prsc.errors import PrscError
 from prsc.ir import model as ir
+from prsc.ir.program import Program, SelfRef
 
 Fn = Callable[[SceneContext], Any]
 _MISSING = object()
@@ -102,7 +103,7 @@ def _once_per_scene(
 class ExprCompiler:
     """Compiles the expressions of one Program; knows variables and static object facts."""
 
-    def __init__(self, program: ir.Program, facts: StaticFacts | None = None) -> None:
+    def __init__(self, program: Program, facts: StaticFacts | None = None) -> None:
         self.program = program
         self.facts = facts if facts is not None else StaticFacts()
         self._variables = {v.name: v for v in program.variables}
@@ -195,7 +196,7 @@ class ExprCompiler:
         tf = target.fn
         return Compiled(lambda ctx: attribute(tf(ctx), prop, ctx, span), False)
 
-    def _c_SelfRef(self, e: ir.SelfRef) -> Compiled:
+    def _c_SelfRef(self, e: SelfRef) -> Compiled:
         raise PrscError("'self' outside a class default", e.span)
 
     def _c_FacePoint(self, e: ir.FacePoint) -> Compiled:

@@ -29,7 +29,7 @@ from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import is_feasible
 from prsc.geometry.lp import solve_lp
 from prsc.geometry.polytope import Polytope
-from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl, Program
 
 
 def _bounding_box(poly: Polytope) -> Polytope | None:
@@ -50,7 +50,7 @@ def _bounding_box(poly: Polytope) -> Polytope | None:
     return Polytope.from_rows(np.vstack([eye, -eye]), np.concatenate([hi, -lo]))
 
 
-def _properties(low: LoweringState, obj: ir.ObjectDecl) -> tuple[dict[str, Fn], dict[str, Any]]:
+def _properties(low: LoweringState, obj: ObjectDecl) -> tuple[dict[str, Fn], dict[str, Any]]:
     """The object's property evaluators, and the values known at compile time."""
     known = low.facts.props[obj.name] = {}
     property_fns: dict[str, Fn] = {}
@@ -70,7 +70,7 @@ def _properties(low: LoweringState, obj: ir.ObjectDecl) -> tuple[dict[str, Fn], 
     return property_fns, dict(known)
 
 
-def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan) -> ObjectPlan:
+def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) -> ObjectPlan:
     name = obj.name
     facts = low.facts
     property_fns, static_props = _properties(low, obj)
@@ -133,7 +133,7 @@ def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan)
     )
 
 
-def lower_program(program: ir.Program) -> ConstraintProgram:
+def lower_program(program: Program) -> ConstraintProgram:
     """Lower a typed Program to the constraint IR; PrscError for a provably empty region."""
     low = LoweringState(program)
     workspace_box = None

@@ -21,6 +21,7 @@ from prsc.constraints.support import Support
 from prsc.errors import Span
 from prsc.geometry.polytope import Polytope
 from prsc.ir import model as ir
+from prsc.ir.program import Program
 
 # Rejection causes, as in the paper's Table II (plus require and the exact sampler's
 # proven dead ends).
@@ -181,7 +182,7 @@ class SoftRequire:
 class ConstraintProgram:
     """The whole spec lowered for sampling."""
 
-    program: ir.Program
+    program: Program
     objects: tuple[ObjectPlan, ...]
     labels: tuple[RowLabel, ...]
     # Requires that mention no object: checked once per scene before placing objects.

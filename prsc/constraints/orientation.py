@@ -14,9 +14,10 @@ from prsc.constraints.values import ObjectValue, OrientedPoint, as_position
 from prsc.errors import PrscError
 from prsc.geometry.rotations import rotation_taking_y_to, yaw_matrix, yaw_toward
 from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl
 
 
-def orientation_rule(low: LoweringState, obj: ir.ObjectDecl) -> OrientationRule | None:
+def orientation_rule(low: LoweringState, obj: ObjectDecl) -> OrientationRule | None:
     """The object's orientation rule (the last specifier setting orientation wins)."""
     spec = None
     for s in obj.specifiers:

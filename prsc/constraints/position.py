@@ -16,6 +16,7 @@ from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl
 
 
 def _cause(spec: ir.Specifier) -> str:
@@ -85,7 +86,7 @@ def template(low: LoweringState, rule: Rule, support: Support | None, me: Object
     return RowTemplate(rows_from_values(rule, values, needs), anchor)
 
 
-def specifier_rule(low: LoweringState, obj: ir.ObjectDecl, spec: ir.Specifier, support: Support | None, me: ObjectValue) -> Rule | None:
+def specifier_rule(low: LoweringState, obj: ObjectDecl, spec: ir.Specifier, support: Support | None, me: ObjectValue) -> Rule | None:
     """The rule of one specifier that sets the position, else None."""
     if "position" not in spec.sets:
         return None
@@ -125,7 +126,7 @@ def stack_below(low: LoweringState, target: ir.Expr) -> tuple[ir.Expr, ...]:
     return tuple(chain)
 
 
-def _declared_mass(low: LoweringState, obj: ir.ObjectDecl) -> tuple[tuple[str, Any], ...]:
+def _declared_mass(low: LoweringState, obj: ObjectDecl) -> tuple[tuple[str, Any], ...]:
     """The object's `mass` as a rule option (none: density times its box volume); in a stack
     it must be a constant, since the rows weigh the objects by it."""
     expr = obj.prop("mass")
@@ -137,7 +138,7 @@ def _declared_mass(low: LoweringState, obj: ir.ObjectDecl) -> tuple[tuple[str, A
     return (("mass", float(mass)),)
 
 
-def workspace_rule(low: LoweringState, obj: ir.ObjectDecl, workspace: ir.Expr, support: Support | None, me: ObjectValue) -> Rule:
+def workspace_rule(low: LoweringState, obj: ObjectDecl, workspace: ir.Expr, support: Support | None, me: ObjectValue) -> Rule:
     """The workspace as a rule on one object: its box completely inside."""
     span: Span | None = workspace.span
     label = low.label(obj.name, "workspace", span, CONTAINMENT)

@@ -17,7 +17,7 @@ from prsc.constraints.state import LoweringState
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope
-from prsc.ir import model as ir
+from prsc.ir.program import Require
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,7 @@ class RequirePlan:
 
     labels: dict[int, int]  # require index -> label id
     last: dict[int, int]  # require index -> index of the object placed last among those it mentions (-1: none)
-    per_object: dict[str, list[tuple[int, ir.Require]]]
+    per_object: dict[str, list[tuple[int, Require]]]
     soft: tuple[SoftRequire, ...]
     soft_index: dict[int, int]
 
@@ -34,7 +34,7 @@ class RequirePlan:
 def plan_requires(low: LoweringState) -> RequirePlan:
     """Label every require and assign it to the object placed last among those it mentions."""
     program = low.program
-    per_object: dict[str, list[tuple[int, ir.Require]]] = {o.name: [] for o in program.objects}
+    per_object: dict[str, list[tuple[int, Require]]] = {o.name: [] for o in program.objects}
     soft: list[SoftRequire] = []
     soft_index: dict[int, int] = {}
     labels: dict[int, int] = {}
@@ -64,7 +64,7 @@ def _holds(test: Callable[[SceneContext], Any], span: Span, ctx: SceneContext) -
     return truthy(test(ctx), span)
 
 
-def require_check(low: LoweringState, req: ir.Require, label: int, soft: int | None) -> RequireCheck:
+def require_check(low: LoweringState, req: Require, label: int, soft: int | None) -> RequireCheck:
     """A require as a test on a scene (for rejection)."""
     return RequireCheck(label, functools.partial(_holds, low.compiler.compile(req.condition).fn, req.span), soft)
 
@@ -92,7 +92,7 @@ def _on_p(cond: Callable[[SceneContext], tuple[list, list, list, list]]) -> Call
 Lowering = Callable[..., Callable[[SceneContext], tuple[list, list, list, list]] | None]
 
 
-def _template(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, anchor: str | None,
+def _template(low: LoweringState, me: ObjectValue, req: Require, label: int, anchor: str | None,
               lowering: Lowering = lower_condition) -> RowTemplate | None:
     """The require's rows when everything but the target (and the anchor) is constant, else None."""
     target = me.name
@@ -111,7 +111,7 @@ def _template(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, 
     return None
 
 
-def require_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, soft: int | None, support_known: bool,
+def require_rule(low: LoweringState, me: ObjectValue, req: Require, label: int, soft: int | None, support_known: bool,
                  lowering: Lowering = lower_condition) -> Rule | None:
     """A lowered require as a rule on `me`'s position, or None when it is not linear there."""
     cond = lowering(low.compiler, req.condition, me.name)
@@ -130,7 +130,7 @@ def require_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: in
     return Rule("require", label, req.span, (req.condition,), (), template, soft, (_on_p(cond),))
 
 
-def implied_rule(low: LoweringState, me: ObjectValue, req: ir.Require, label: int, soft: int | None,
+def implied_rule(low: LoweringState, me: ObjectValue, req: Require, label: int, soft: int | None,
                  support_known: bool) -> Rule | None:
     """Rows a hard require that is not linear implies (`distance ... < r`: a box), as a rule that
     narrows `me`'s region; the require is still checked. None for a soft require or none known."""

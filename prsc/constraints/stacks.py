@@ -25,14 +25,11 @@ from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope, intersect
+from prsc.ir.builtins import DENSITY
 
 MARGIN = 0.25
 """Each face is shrunk by this fraction of its half-extents: a centre of mass right at an edge
 balances in statics but tips under a simulator's soft contacts (measured in docs/language.md)."""
-
-DENSITY = 500.0
-"""kg/m^3 of an object that declares no mass (the scene JSON's default; docs/language.md)."""
-
 
 def object_mass(obj: ObjectValue) -> float:
     """The object's mass: its `mass` if a number, else density times its box volume."""

@@ -11,7 +11,7 @@ from prsc.constraints.evaluate import ExprCompiler, StaticFacts
 from prsc.constraints.model import RowLabel
 from prsc.constraints.values import ObjectValue, static_dims
 from prsc.errors import Span
-from prsc.ir import model as ir
+from prsc.ir.program import Program
 
 
 @lru_cache(maxsize=32)
@@ -20,7 +20,7 @@ def _lines(text: str) -> tuple[str, ...]:
     return tuple(text.splitlines())
 
 
-def source_text(program: ir.Program, span: Span | None, fallback: str = "") -> str:
+def source_text(program: Program, span: Span | None, fallback: str = "") -> str:
     """The source text a span covers, on one line (whitespace collapsed), from the IR's own copy of the files."""
     if span is None:
         return fallback
@@ -44,7 +44,7 @@ def source_text(program: ir.Program, span: Span | None, fallback: str = "") -> s
 class LoweringState:
     """State while lowering one program."""
 
-    def __init__(self, program: ir.Program) -> None:
+    def __init__(self, program: Program) -> None:
         self.program = program
         self.facts = StaticFacts()
         self.compiler = ExprCompiler(program, self.facts)

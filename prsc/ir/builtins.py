@@ -9,6 +9,7 @@ from prsc.ir.model import Type
 
 ROOT_CLASS = "Object"
 BUILTIN_SPAN = Span("<builtin Object>", 1, 1, 1, 1)  # where Object's defaults are "written"
+DENSITY = 500.0  # kg/m^3 of an object that declares no `mass` (docs/language.md section 11)
 
 # Built-in properties and the static types a value for them may have.
 PROPERTY_TYPES: dict[str, frozenset[Type]] = {

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from prsc.errors import PrscError
 from prsc.ir import model as ir
+from prsc.ir.program import Program
 from prsc.limits import mass_problem, size_problem
 
 SIZES = ("width", "length", "height")
@@ -28,7 +29,7 @@ def constant_number(expr: ir.Expr) -> float | None:
     return None
 
 
-def check_values(program: ir.Program) -> None:
+def check_values(program: Program) -> None:
     """Raise a PrscError at the value's place for a constant size or mass a simulator cannot hold."""
     for obj in program.objects:
         for prop in SIZES:

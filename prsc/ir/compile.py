@@ -8,6 +8,7 @@ from typing import Sequence
 
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
+from prsc.ir.program import ClassDef, ObjectDecl, Param, Program, Require, SelfRef, Variable
 from prsc.ir.builtins import (BUILTIN_SPAN, MATH_CONSTANTS, OBJECT_DEFAULTS, PROPERTY_TYPES, ROOT_CLASS,
                               SPECIFIER_PROPERTIES)
 from prsc.ir.checks import check_values, constant_number
@@ -51,10 +52,10 @@ class Compiler(LoopStatements):
         self.scope.names[ROOT_CLASS] = root
         self.classes: list[ClassInfo] = [root]
         self.draws = DrawIds()
-        self.objects: list[ir.ObjectDecl] = []
-        self.variables: list[ir.Variable] = []
-        self.params: dict[str, ir.Param] = {}
-        self.requires: list[ir.Require] = []
+        self.objects: list[ObjectDecl] = []
+        self.variables: list[Variable] = []
+        self.params: dict[str, Param] = {}
+        self.requires: list[Require] = []
         self.workspace: ir.Expr | None = None
         self.executed: set[str] = set()
         self.exports: dict[str, dict[str, object]] = {}
@@ -72,20 +73,20 @@ class Compiler(LoopStatements):
 
     # ------------------------------------------------------------ driving
 
-    def run(self) -> ir.Program:
+    def run(self) -> Program:
         """Compile the main module and everything it imports."""
         main = self.graph.modules[self.graph.main]
         if not main.statements:
             raise PrscError("empty spec: the file has no statements", Span(main.path, 1, 1, 1, 1))
         self._execute(self.graph.main)
-        return ir.Program(
+        return Program(
             path=main.path,
             objects=tuple(self.objects),
             variables=tuple(self.variables),
             params=tuple(self.params.values()),
             requires=tuple(self.requires),
             workspace=self.workspace,
-            classes=tuple(ir.ClassDef(c.name, c.parent.name if c.parent else None, tuple(c.defaults().items()),
+            classes=tuple(ClassDef(c.name, c.parent.name if c.parent else None, tuple(c.defaults().items()),
                                       c.span, tuple(c.default_specifiers().values())) for c in self.classes),
             source_files=tuple(self.graph.modules[p].path for p in self.graph.order),
             sources=tuple((self.graph.modules[p].path, self.graph.modules[p].source) for p in self.graph.order),
@@ -170,7 +171,7 @@ class Compiler(LoopStatements):
         info = VariableInfo(ir_name, value, s.span)
         self.scope.variables[ir_name] = info
         self.variable_objects[ir_name] = self._objects_of(value)
-        self.variables.append(ir.Variable(ir_name, value, s.span))
+        self.variables.append(Variable(ir_name, value, s.span))
         self._bind(s.target, info, s.target_span)
         if s.target == "workspace":
             self.workspace = value
@@ -181,7 +182,7 @@ class Compiler(LoopStatements):
                 raise PrscError(f"param '{name}' is set twice", span,
                                 notes=(("first set here", self.params[name].span),))
             value = ExprResolver(self.scope, self.draws).resolve(value_ast)
-            self.params[name] = ir.Param(name, value, span)
+            self.params[name] = Param(name, value, span)
 
     def _require(self, s: nodes.RequireStmt) -> None:
         resolver = ExprResolver(self.scope, self.draws)
@@ -198,7 +199,7 @@ class Compiler(LoopStatements):
         if condition.type not in (T.BOOL, T.ANY):
             raise PrscError(f"require needs a condition (true or false), not {article(condition.type)}",
                             condition.span)
-        self.requires.append(ir.Require(condition, probability, s.span))
+        self.requires.append(Require(condition, probability, s.span))
 
     def _expression_statement(self, s: nodes.ExprStmt) -> None:
         value = s.value
@@ -277,7 +278,7 @@ class Compiler(LoopStatements):
         fresh: dict[int, int] = {}
 
         def replace(node: ir.Expr) -> ir.Expr | None:
-            if isinstance(node, ir.SelfRef):
+            if isinstance(node, SelfRef):
                 return ir.PropertyRef(node.span, node.type, ir.ObjectRef(node.span, T.OBJECT, object_name), node.prop)
             if isinstance(node, ir.Distribution):
                 if node.draw_id not in fresh:
@@ -349,7 +350,7 @@ class Compiler(LoopStatements):
                 depends |= self._objects_of(expr)
         depends.discard(object_name)
         order = {o.name: i for i, o in enumerate(self.objects)}
-        decl = ir.ObjectDecl(
+        decl = ObjectDecl(
             name=object_name,
             class_name=cls.name,
             anonymous=name is None,
@@ -374,7 +375,7 @@ class Compiler(LoopStatements):
         return dataclasses.replace(template, **changes)
 
 
-def compile_program(path: str, include_dirs: Sequence[str] = ()) -> ir.Program:
+def compile_program(path: str, include_dirs: Sequence[str] = ()) -> Program:
     """Parse, resolve imports and names, type-check and order a spec: the Program IR."""
     path = os.fspath(path)
     try:

@@ -8,6 +8,7 @@ from typing import Callable
 
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
+from prsc.ir.program import SelfRef
 from prsc.ir.builtins import (CONSTRUCTORS, FACE_WORD_GROUPS, FUNCTIONS, MATH_CONSTANTS, PROPERTY_TYPES,
                               SPECIFIER_PROPERTIES)
 from prsc.ir.scope import (ClassInfo, ConstantInfo, LoopNames, MathModule, ObjectInfo, Scope, SpecModule,
@@ -195,11 +196,11 @@ class ExprResolver:
             raise PrscError(f"a class default cannot read self.{prop}: position and orientation are set "
                             f"by specifiers, after the properties", e.span)
         if prop in self.self_props:
-            return ir.SelfRef(e.span, self.self_props[prop], prop)
+            return SelfRef(e.span, self.self_props[prop], prop)
         cls = self.self_class
         assert cls is not None
         if cls.has(prop):
-            return ir.SelfRef(e.span, cls.value_type(prop), prop)
+            return SelfRef(e.span, cls.value_type(prop), prop)
         known = [*self.self_props, *cls.properties()]
         raise PrscError(f"unknown property '{prop}' of class {cls.name}{did_you_mean(prop, known)}", e.name_span)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl, Program, SelfRef
 from prsc.ir.builtins import DIRECTION_PHRASES
 
 _PRECEDENCE = {"or": 1, "and": 2, "not": 3, "compare": 4, "relative": 5, "+": 6, "-": 6, "*": 7, "/": 7,
@@ -60,7 +61,7 @@ def format_expr(expr: ir.Expr) -> str:
         return "[" + ", ".join(format_expr(i) for i in expr.items) + "]"
     if isinstance(expr, (ir.ObjectRef, ir.VarRef)):
         return expr.name
-    if isinstance(expr, ir.SelfRef):
+    if isinstance(expr, SelfRef):
         return f"self.{expr.prop}"
     if isinstance(expr, ir.PropertyRef):
         return f"{_wrap(expr.target, 10)}.{expr.prop}"
@@ -137,7 +138,7 @@ def format_specifier(spec: ir.Specifier) -> str:
     return type(spec).__name__  # pragma: no cover
 
 
-def format_object(obj: ir.ObjectDecl, verbose: bool = True) -> str:
+def format_object(obj: ObjectDecl, verbose: bool = True) -> str:
     """An object: name, class, properties and its specifiers in evaluation order."""
     label = f"{obj.name}: {obj.class_name}" + (" (anonymous)" if obj.anonymous else "")
     lines = [f"{label}  [line {obj.span.line}]"]
@@ -153,7 +154,7 @@ def format_object(obj: ir.ObjectDecl, verbose: bool = True) -> str:
     return "\n".join(lines)
 
 
-def format_program(program: ir.Program) -> str:
+def format_program(program: Program) -> str:
     """A readable dump of a whole Program."""
     out = [f"program {program.path}"]
     if len(program.source_files) > 1:

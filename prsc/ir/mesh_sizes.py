@@ -9,6 +9,7 @@ from typing import Sequence
 
 from prsc.errors import PrscError
 from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl, Program
 from prsc.ir.builtins import BUILTIN_SPAN
 from prsc.ir.checks import SIZES
 from prsc.ir.scope import did_you_mean
@@ -31,7 +32,7 @@ def _constant_strings(expr: ir.Expr) -> tuple[str, ...] | None:
     return None
 
 
-def _mesh_file(obj: ir.ObjectDecl, raw: str, mesh: ir.Expr, folders: Sequence[str]):
+def _mesh_file(obj: ObjectDecl, raw: str, mesh: ir.Expr, folders: Sequence[str]):
     """The mesh file `raw` names, or an error at the expression that names it."""
     try:
         # Existence only: whether a path outside the spec's folders may be read is the
@@ -41,7 +42,7 @@ def _mesh_file(obj: ir.ObjectDecl, raw: str, mesh: ir.Expr, folders: Sequence[st
         raise PrscError(f"{obj.name}: {error.message}", mesh.span) from None
 
 
-def _sized(obj: ir.ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ir.ObjectDecl:
+def _sized(obj: ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ObjectDecl:
     """`obj` with the mesh shape and the unset sizes taken from its mesh file."""
     props = dict(obj.properties)
     shape = props.get("shape")
@@ -73,7 +74,7 @@ def _sized(obj: ir.ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ir.Obje
     return replace(obj, properties=tuple((name, props[name]) for name in dict(obj.properties)))
 
 
-def with_mesh_sizes(program: ir.Program, include_dirs: Sequence[str] = ()) -> ir.Program:
+def with_mesh_sizes(program: Program, include_dirs: Sequence[str] = ()) -> Program:
     """The program with every mesh object's shape and unset sizes filled in from its file."""
     folders = mesh_folders(program.path, include_dirs)
     objects = tuple(o if o.prop("mesh") is None else _sized(o, o.prop("mesh"), folders) for o in program.objects)

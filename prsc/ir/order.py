@@ -7,6 +7,7 @@ from typing import Callable, Sequence, TypeVar
 
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
+from prsc.ir.program import SelfRef
 from prsc.ir.walk import walk
 
 N = TypeVar("N")
@@ -74,14 +75,14 @@ def order_specifiers(specs: Sequence[ir.Specifier]) -> tuple[ir.Specifier, ...]:
             f"{', '.join(needs_first)} from {_spec_words(first)}, which needs {', '.join(needs_second)} "
             f"from {_spec_words(second)}" if needs_second else
             f"specifiers depend on each other in a cycle through {_spec_words(first)} and {_spec_words(second)}",
-            second.span, notes=((f"the other specifier in the cycle", first.span),))
+            second.span, notes=(("the other specifier in the cycle", first.span),))
     return tuple(ordered)
 
 
 def self_reads(expr: ir.Expr, object_name: str | None) -> set[str]:
     """Properties of object_name (None: of `self` in a class template) that an expression reads."""
     if object_name is None:
-        return {node.prop for node in walk(expr) if isinstance(node, ir.SelfRef)}
+        return {node.prop for node in walk(expr) if isinstance(node, SelfRef)}
     return {node.prop for node in walk(expr)
             if isinstance(node, ir.PropertyRef) and isinstance(node.target, ir.ObjectRef)
             and node.target.name == object_name}

@@ -16,7 +16,7 @@ from typing import Any, Callable, Iterator, Sequence
 from prsc.constraints.lower import lower_program
 from prsc.constraints.model import ConstraintProgram
 from prsc.errors import PrscError
-from prsc.ir import model as ir
+from prsc.ir.program import Program
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
@@ -30,7 +30,7 @@ class Sampler:
 
     def __init__(
         self,
-        program: ir.Program,
+        program: Program,
         sampler: str = "exact",
         *,
         walk_length: int = 100,

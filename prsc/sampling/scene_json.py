@@ -16,12 +16,12 @@ import numpy as np
 from prsc.constraints.values import DIMENSIONS, ObjectValue, OrientedPoint, RegionValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.rotations import matrix_to_quat
+from prsc.ir.builtins import DENSITY
 from prsc.ir.models import model_of
 from prsc.limits import mass_problem, size_problem
 
 FORMAT = "prsc-scene"
 VERSION = 1
-DENSITY = 500.0  # kg/m^3 (docs/language.md section 11)
 ROBOT_MODELS = frozenset({"panda"})
 # Models fixed in the world unless the spec says `static False`: robot arms are mounted,
 # cameras stay where they were sampled, tables are furniture.

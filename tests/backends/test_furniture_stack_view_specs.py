@@ -1,36 +1,17 @@
-"""The example specs of support surfaces, stacks and visibility: every format, at rest in MuJoCo."""
+"""What the example specs of stacks and visibility promise beyond their rows (compiled and settled in
+tests/specs/test_example_specs.py): the fourth cube's distance, the camera's own image."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
-import pytest
 
-from prsc.backends import TARGETS
 from prsc.cli import main
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
-from tests.sampling.scene_checks import check_scenes
 
 SPECS = Path(__file__).resolve().parents[2] / "specs"
-
-
-@pytest.mark.parametrize("name", ["kitchen_shelf", "stack_and_cube", "camera_view"])
-def test_the_spec_compiles_to_every_format_and_its_scenes_are_at_rest(tmp_path, capsys, name):
-    spec = SPECS / f"{name}.prs"
-    targets = ",".join(TARGETS)
-    code = main(["compile", str(spec), "-t", targets, "-n", "10", "-o", str(tmp_path), "--settle-check"])
-    out = capsys.readouterr().out
-    assert code == 0, out
-    assert "settle check: 10 of 10 scenes at rest" in out
-    root = tmp_path / name
-    for target in TARGETS:
-        assert len(list((root / target).iterdir())) == 10, target
-    program = compile_program(str(spec), (str(SPECS),))
-    sampler = Sampler(program, "exact")
-    report = check_scenes(program, [sampler.scene(0, i) for i in range(10)])  # the same scenes, checked
-    assert not report and report.checked > 0, report
 
 
 def test_the_fourth_cube_is_at_least_10_cm_from_every_cube_of_the_stack():
@@ -38,11 +19,8 @@ def test_the_fourth_cube_is_at_least_10_cm_from_every_cube_of_the_stack():
     sampler = Sampler(compile_program(str(spec), (str(SPECS),)), "exact")
     for index in range(200):
         boxes = {o.name: o for o in sampler.sample(0, index).objects}
-        n = boxes["base"].rotation[:, 0]  # separated along the base's x: a lower bound on the distance
-        def reach(o, sign):
-            return sign * float(n @ o.position) + float(np.abs(n @ o.rotation) @ (np.array(o.dims) / 2))
-        gap = -reach(boxes["loose"], -1) - max(reach(boxes[k], 1) for k in ("base", "middle", "top_cube"))
-        assert gap >= 0.1 - 1e-9
+        for cube in ("base", "middle", "top_cube"):
+            assert np.linalg.norm(boxes["loose"].position - boxes[cube].position) >= 0.1 - 1e-9
 
 
 def test_what_camera_view_declares_visible_is_whole_in_the_cameras_own_image(tmp_path):

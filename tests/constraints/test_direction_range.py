@@ -13,13 +13,14 @@ from prsc.constraints.specifiers import DIRECTION_AXES, rows_direction
 from prsc.constraints.support import Support
 from prsc.ir import compile_program
 from prsc.ir import model as ir
+from prsc.ir.program import Program
 from prsc.sampling import Sampler
 from tests.sampling.scene_checks import check_scene, check_scenes
 
 H = "from tabletop import *\nt = Table on Vector3D(0, 0, 0)\nr = Robot on (top back t).position\n"
 
 
-def compile_text(tmp_path, text: str) -> ir.Program:
+def compile_text(tmp_path, text: str) -> Program:
     path = tmp_path / "spec.prs"
     path.write_text(H + text)
     return compile_program(str(path))

@@ -12,6 +12,7 @@ from prsc.cli import main
 from prsc.constraints import lower_program
 from prsc.ir import compile_program
 from prsc.ir import model as ir
+from prsc.ir.program import Program
 from prsc.sampling import Sampler
 from prsc.syntax import nodes
 from prsc.syntax.parser import parse_source
@@ -20,7 +21,7 @@ from tests.sampling.scene_checks import check_scene, check_scenes
 H = "from tabletop import *\nt = Table on Vector3D(0, 0, 0)\n"
 
 
-def compile_text(tmp_path, text: str) -> ir.Program:
+def compile_text(tmp_path, text: str) -> Program:
     path = tmp_path / "spec.prs"
     path.write_text(H + text)
     return compile_program(str(path))

@@ -13,6 +13,7 @@ from prsc.constraints.evaluate import ExprCompiler
 from prsc.constraints.values import ObjectValue, OrientedPoint
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
+from prsc.ir.program import Program, Variable
 
 S = Span("hand.prs", 3, 5, 3, 9)
 T = ir.Type
@@ -35,7 +36,7 @@ def rng_range(lo, hi, draw_id):
 
 
 def program(variables=()):
-    return ir.Program("hand.prs", (), tuple(variables), (), (), None)
+    return Program("hand.prs", (), tuple(variables), (), (), None)
 
 
 def compiler(variables=()):
@@ -76,7 +77,7 @@ def test_a_distribution_is_drawn_once_per_scene_and_shared_by_its_uses():
 
 
 def test_a_random_variable_is_one_value_per_scene():
-    var = ir.Variable("x", rng_range(2, 3, draw_id=1), S)
+    var = Variable("x", rng_range(2, 3, draw_id=1), S)
     comp = compiler([var])
     ref = ir.VarRef(S, T.SCALAR, "x")
     total = comp.compile(binop("-", ref, ref))

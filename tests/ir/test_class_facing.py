@@ -11,6 +11,7 @@ from scipy import stats
 from prsc.cli import main
 from prsc.ir import compile_program, format_program
 from prsc.ir import model as ir
+from prsc.ir.program import Program
 from prsc.sampling import Sampler
 from prsc.syntax.parser import parse_source
 from tests.sampling.scene_checks import check_scenes, quat_matrix
@@ -19,13 +20,13 @@ H = "from tabletop import *\nt = Table on Vector3D(0, 0, 0)\n"
 MUG = "class Mug(Cup):\n    width: 0.08\n    facing: (0, 360 deg)\n"
 
 
-def compile_text(tmp_path, text: str) -> ir.Program:
+def compile_text(tmp_path, text: str) -> Program:
     path = tmp_path / "spec.prs"
     path.write_text(H + text)
     return compile_program(str(path))
 
 
-def orientation_specs(program: ir.Program, name: str) -> list[ir.Specifier]:
+def orientation_specs(program: Program, name: str) -> list[ir.Specifier]:
     decl = next(o for o in program.objects if o.name == name)
     return [s for s in decl.specifiers if "orientation" in s.sets]
 

@@ -10,6 +10,7 @@ import pytest
 from prsc.errors import PrscError
 from prsc.ir import compile_program, format_program
 from prsc.ir import model as ir
+from prsc.ir.program import ObjectDecl, Program, SelfRef
 from prsc.ir.walk import walk
 from tests.original import ORIGINAL, needs_original, original_params
 
@@ -17,18 +18,18 @@ REPO = Path(__file__).resolve().parents[2]
 H = "from tabletop import *\n"
 
 
-def compile_text(tmp_path, text: str, name: str = "spec.prs", **kwargs) -> ir.Program:
+def compile_text(tmp_path, text: str, name: str = "spec.prs", **kwargs) -> Program:
     """Compile a spec written to tmp_path."""
     path = tmp_path / name
     path.write_text(text)
     return compile_program(str(path), **kwargs)
 
 
-def obj(program: ir.Program, name: str) -> ir.ObjectDecl:
+def obj(program: Program, name: str) -> ObjectDecl:
     return next(o for o in program.objects if o.name == name)
 
 
-def all_exprs(program: ir.Program):
+def all_exprs(program: Program):
     for o in program.objects:
         for _, e in o.properties:
             yield from walk(e)
@@ -263,5 +264,5 @@ def test_every_expression_is_typed_and_no_selfref_survives():
     program = compile_program(str(ORIGINAL / "tableCubeNaive.prs"))
     for e in all_exprs(program):
         assert isinstance(e.type, ir.Type)
-        assert not isinstance(e, ir.SelfRef)
+        assert not isinstance(e, SelfRef)
     assert len(program.requires) == 14

@@ -7,7 +7,7 @@ import pytest
 from prsc.cli import main
 from prsc.errors import PrscError
 from prsc.ir import compile_program
-from prsc.ir import model as ir
+from prsc.ir.program import Program
 from prsc.ir.loops import MAX_LOOP_ITERATIONS
 from prsc.sampling import Sampler
 from prsc.syntax import nodes
@@ -17,7 +17,7 @@ from tests.sampling.scene_checks import check_scenes
 H = "from tabletop import *\nt = Table on Vector3D(0, 0, 0)\n"
 
 
-def compile_text(tmp_path, text: str) -> ir.Program:
+def compile_text(tmp_path, text: str) -> Program:
     path = tmp_path / "spec.prs"
     path.write_text(H + text)
     return compile_program(str(path))

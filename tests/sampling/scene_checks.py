@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from prsc.ir import model as ir
+from prsc.ir.program import Program
 
 TOL = 1e-9  # metres: every specifier and require holds to this
 CONTACT = 1e-6  # boxes overlapping by less than this along some axis are in contact, not colliding
@@ -181,7 +182,7 @@ _SIDES = {"left": (0, -1.0), "right": (0, 1.0), "ahead": (1, 1.0), "behind": (1,
 class Evaluator:
     """Interval evaluation of IR expressions against one scene."""
 
-    def __init__(self, program: ir.Program, bodies: dict[str, Body]) -> None:
+    def __init__(self, program: Program, bodies: dict[str, Body]) -> None:
         self.program = program
         self.bodies = bodies
         self.variables = {v.name: v for v in program.variables}
@@ -379,7 +380,7 @@ def _spec_text(spec: ir.Specifier) -> str:
     return f"{type(spec).__name__} at line {spec.span.line}"
 
 
-def check_scene(program: ir.Program, scene: dict) -> SceneCheck:
+def check_scene(program: Program, scene: dict) -> SceneCheck:
     """Every violated relation of one scene, as readable strings (empty when the scene is valid).
 
     A relation the checker cannot evaluate is not a violation, but it is listed in
@@ -448,7 +449,7 @@ def check_scene(program: ir.Program, scene: dict) -> SceneCheck:
     return problems
 
 
-def check_scenes(program: ir.Program, scenes: Any) -> SceneCheck:
+def check_scenes(program: Program, scenes: Any) -> SceneCheck:
     """check_scene over several scenes (problems prefixed by the scene's index); a relation
     not checked in any of them is a problem too (so a spec the checker cannot read fails)."""
     total = SceneCheck()
