@@ -17,11 +17,15 @@ from prsc.constraints.lower import lower_program
 from prsc.constraints.model import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir import model as ir
+from prsc.sampling.gibbs import DEFAULT_SWEEPS
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
 from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
 from prsc.sampling.scene_json import object_template, scene_json
 
 SAMPLERS = ("exact", "hit-and-run", "rejection")
+# The law of a scene (docs/sampling.md): the joint one by Gibbs sweeps (default), objects one
+# at a time (sequential), or the joint one by whole-scene rejection (the exact reference).
+LAWS = ("joint", "sequential", "rejection")
 
 
 class Sampler:
@@ -34,6 +38,8 @@ class Sampler:
         *,
         walk_length: int = 100,
         joint: bool = False,
+        law: str = "joint",
+        sweeps: int = DEFAULT_SWEEPS,
         limits: Limits | None = None,
         max_attempts: int = DEFAULT_ATTEMPTS,
         spec: str | None = None,
@@ -43,6 +49,12 @@ class Sampler:
             raise PrscError(f"unknown sampler {sampler!r} (choose from {', '.join(SAMPLERS)})")
         if walk_length < 1:
             raise PrscError(f"the hit-and-run walk length must be >= 1, got {walk_length}")
+        if law not in LAWS:
+            raise PrscError(f"unknown law {law!r} (choose from {', '.join(LAWS)})")
+        if sweeps < 1:
+            raise PrscError(f"the number of Gibbs sweeps must be >= 1, got {sweeps}")
+        law = "rejection" if joint else law  # `joint=True` is the older spelling
+        self.law = law
         self.program = program
         self.method = sampler
         self.spec = spec if spec is not None else program.path
@@ -57,7 +69,9 @@ class Sampler:
         if sampler == "rejection":
             self._engine = RejectionSampler(self.constraints, max_attempts)
         else:
-            self._engine = SequentialSampler(self.constraints, sampler, walk_length, joint, limits)
+            self._engine = SequentialSampler(
+                self.constraints, sampler, walk_length, law == "rejection", limits, sweeps if law == "joint" else 0
+            )
 
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
@@ -80,7 +94,7 @@ class Sampler:
 def compile_sampler(
     path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = (), sampler: str = "exact", **opts: Any
 ) -> Sampler:
-    """Compile a .prs file into a Sampler (opts: walk_length, joint, limits, max_attempts)."""
+    """Compile a .prs file into a Sampler (opts: walk_length, law, sweeps, joint, limits, max_attempts)."""
     from prsc.ir import compile_program
 
     program = compile_program(path, include_dirs)
