@@ -36,7 +36,7 @@ from prsc.commands.output_folder import (
     CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
     lock_folder, output_root, prepare_root, record_file, remove_listed, write_manifest,
 )
-from prsc.commands.scene_sources import read_input, read_scene_file, spec_sampler
+from prsc.commands.scene_sources import add_law_argument, read_input, read_scene_file, spec_sampler
 from prsc.errors import PrscError
 
 
@@ -58,6 +58,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--force", action="store_true",
                         help="replace the scenes of another spec or seed in the output folder (only files its manifest lists)")
     add_executor_arguments(parser)
+    add_law_argument(parser)
 
 
 # ------------------------------------------------------------------ jobs
@@ -79,6 +80,7 @@ class Job:
     # folder's manifest is this run's (a kill between rename and record), else refused.
     adopt_unlisted: bool = True
     meshes_anywhere: bool = False  # --meshes-anywhere
+    law: str = "joint"  # --law: the law a worker compiling the spec again samples
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
     def scene(self, index: int) -> dict:
@@ -86,7 +88,7 @@ class Job:
         if self.scenes is not None:
             return self.scenes[index]
         if self._sampler is None:
-            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs)
+            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs, self.law)
         return self._sampler(index)
 
     def __getstate__(self) -> dict:
@@ -214,7 +216,7 @@ def _progress(total: int):
 
 def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
                    include_dirs: Sequence[str] = (), executor: Executor | None = None, force: bool = False,
-                   meshes_anywhere: bool = False) -> Path:
+                   meshes_anywhere: bool = False, law: str = "joint") -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
@@ -251,11 +253,12 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
         from prsc.sampling import compile_sampler
 
-        compiled = compile_sampler(str(file), include_dirs=include_dirs)
+        compiled = compile_sampler(str(file), include_dirs=include_dirs, law=law)
         program = compiled.program
         sampler = functools.partial(compiled.scene, seed)
         data = read_input(path)
         sources = hashlib.sha256(data)
+        sources.update(f"law={law}".encode())  # another law gives other scenes
         for imported in compiled.program.source_files[1:]:
             # The scenes also depend on every imported file (those found through --include
             # too): a change there makes them stale.
@@ -269,7 +272,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     lock = lock_folder(root)
     try:
         return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, data, sources, scenes,
-                               sampler, width, created, meshes_anywhere, executor)
+                               sampler, width, created, meshes_anywhere, executor, law)
     except PrscError as error:
         raise _at_object(error, program) from None
     finally:
@@ -287,7 +290,7 @@ def _at_object(error: PrscError, program: Any) -> PrscError:
 def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int, jobs: int,
                     include_dirs: Sequence[str], force: bool, data: bytes, sources: Any, scenes: list[dict] | None,
                     sampler: Callable[[int], dict] | None, width: int, created: Path | None,
-                    meshes_anywhere: bool, executor: Executor | None) -> Path:
+                    meshes_anywhere: bool, executor: Executor | None, law: str = "joint") -> Path:
     """The part of compile_scenes that runs while this process holds the folder's lock."""
     from prsc.files import remove_stale_temporaries
 
@@ -307,7 +310,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         manifest, entries = None, {}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
               include_dirs=tuple(include_dirs), sources=sources_digest, adopt_unlisted=manifest is not None,
-              meshes_anywhere=meshes_anywhere, _sampler=sampler)
+              meshes_anywhere=meshes_anywhere, law=law, _sampler=sampler)
     listed = Listed(root, {k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
@@ -392,5 +395,5 @@ def run(args: argparse.Namespace) -> int:
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="fork")
     compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
-                   args.force, args.meshes_anywhere)
+                   args.force, args.meshes_anywhere, args.law)
     return 0

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from prsc.commands.executors import add_executor_arguments
+from prsc.commands.scene_sources import add_law_argument
 from prsc.errors import PrscError
 
 RESULTS = "results.jsonl"
@@ -49,6 +50,7 @@ def add_parser(subparsers) -> None:
                         help=f"end an episode past S simulated seconds as outcome `timeout` (default {DEFAULT_MAX_SIM_SECONDS:g})")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     add_executor_arguments(parser)
+    add_law_argument(parser)
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
@@ -194,7 +196,8 @@ def run(args: argparse.Namespace) -> int:
     is_json = source.suffix in (".json", ".jsonl")
     count = args.n if args.n is not None else (0 if is_json else 10)
     root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs, args.include,
-                          make_executor(args.executor, jobs, args.address, start="fork"), force=args.force)
+                          make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
+                          law=args.law)
     pairs = _compiled(root, count)
     scenes = [scene for scene, _ in pairs]
     if check is not None:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from prsc.errors import PrscError, Span
 
@@ -98,9 +98,16 @@ def _nesting_place(text: str, limit: int) -> tuple[int, int]:
     return 1, 1
 
 
-def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = ()) -> Callable[[int], dict]:
+def add_law_argument(parser: Any) -> None:
+    """The --law option of the commands that sample a spec (docs/sampling.md)."""
+    parser.add_argument("--law", choices=("joint", "sequential", "rejection"), default="joint",
+                        help="joint (default: the paper's law, by Gibbs sweeps), sequential (objects one at a time, "
+                             "faster), or rejection (the joint law by whole-scene rejection: the exact reference)")
+
+
+def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), law: str = "joint") -> Callable[[int], dict]:
     """Scene k of a .prs spec as scene JSON (the sampler is imported only when needed)."""
     from prsc.sampling import compile_sampler
 
-    sampler = compile_sampler(spec, include_dirs=include_dirs)
+    sampler = compile_sampler(spec, include_dirs=include_dirs, law=law)
     return lambda index: sampler.scene(seed=seed, index=index)
