@@ -7,11 +7,12 @@ require holding, density  prod_k 1[x_k in R_k] / |R_k|  on the valid scenes.
 
 One update re-places object k. Its dependants (the objects whose rows read it, directly or
 through each other) form its group and move with it by the same translation, as a tray
-carries its cubes. k's new position is drawn exactly uniform on its region minus the boxes
+carries its cubes, or (half the time) are drawn afresh from their regions given k's new
+position. k's new position is drawn exactly uniform on its region minus the boxes
 of every object outside the group (the engine's own draw: rejection, then the exact
 free-space decomposition). The proposal is symmetric (the outside objects do not move), so
-the move is accepted with probability min(1, prod_j |R_j(old)| / |R_j(new)|) over the
-dependants j, and only if every dependant stays in its region, nothing collides and every
+a translation is accepted with probability min(1, prod_j |R_j(old)| / |R_j(new)|) over
+the dependants j (a fresh draw of them cancels those factors), and only if every dependant stays in its region, nothing collides and every
 require holds. Without dependants this is an exact Gibbs draw from k's conditional.
 
 Objects keep their own random values (sizes, pre-position rotations, colours) from the
@@ -29,7 +30,8 @@ import numpy as np
 from prsc.constraints.support import Support
 from prsc.geometry.exceptions import EmptyRegionError
 from prsc.sampling.attempt import Attempt
-from prsc.sampling.collisions import PlacedBox, first_hit, near
+from prsc.geometry.free_space import free_space_sampler
+from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, near, obstacles_for
 from prsc.sampling.regions import Prepared, violated_rule
 from prsc.sampling.runtime import ObjectRuntime
 
@@ -40,6 +42,11 @@ if TYPE_CHECKING:
 # the per-coordinate KS distance to the rejection reference is within noise after 2 sweeps
 # on the specs measured there; 4 doubles that margin.
 DEFAULT_SWEEPS = 4
+# A group move either translates the dependants with k (the measure ratio decides) or, with
+# this probability, draws them afresh from their regions given k's new position: the
+# proposal then cancels the target's 1/|R_j| factors, so only validity decides. Translation
+# moves a tray with its cubes; redrawing moves cups that share a coordinate with k.
+REDRAW = 0.5
 
 
 def _support(rt: ObjectRuntime, rotation: np.ndarray | None, half: np.ndarray) -> Support:
@@ -76,6 +83,8 @@ class GibbsSweeps:
             self.groups.append(tuple(sorted(seen)))
         self.movable = [k for k in range(n) if engine._movable[k]]
         self.has_checks = any(engine._checks)
+        # Fresh draws of a group need every dependant's rotation before its position.
+        self.redraw = [all(not engine.runtimes[j].after_position for j in g[1:]) for g in self.groups]
 
     # ------------------------------------------------------------ detection
     def interacting(self, run: Attempt) -> bool:
@@ -137,7 +146,9 @@ class GibbsSweeps:
         run.placed, run.draws = outside, 0
         moved = engine._draw(rt, obj, half, region, shift, run)
         run.placed = boxes
-        if moved:
+        if moved and len(group) > 1 and self.redraw[k] and ctx.uniform() < REDRAW:
+            moved = self._redraw(group, saved, members, run)
+        elif moved:
             delta = obj.position - saved[0][0]  # type: ignore[operator]
             for o, (p, _) in zip(members[1:], saved[1:]):
                 o.position = p + delta
@@ -151,6 +162,47 @@ class GibbsSweeps:
             boxes[j] = runtimes[j].placed_box(o, np.asarray(o.dims, dtype=float) * 0.5, ctx)
         ctx.level = len(runtimes)
         return moved
+
+    def _redraw(self, group: tuple[int, ...], saved: list, members: list, run: Attempt) -> bool:
+        """Draw the dependants afresh, one by one exactly uniform on what is free, given k's new
+        position; Metropolis ratio prod_j (|F_j| / |R_j|)(new) / (|F_j| / |R_j|)(old)."""
+        ctx, k_rt = run.ctx, self.engine.runtimes[group[0]]
+        k_half = np.asarray(members[0].dims, dtype=float) * 0.5
+        outside = [q for q in run.placed if q.index not in group]
+        new_k, new_rotation = members[0].position, members[0].rotation
+        members[0].position, members[0].rotation = saved[0]  # the old state: the reverse proposal
+        old = self._free_measures(group[1:], [*outside, k_rt.placed_box(members[0], k_half, ctx)], run, draw=False)
+        members[0].position, members[0].rotation = new_k, new_rotation
+        new = self._free_measures(group[1:], [*outside, k_rt.placed_box(members[0], k_half, ctx)], run, draw=True)
+        if old is None or new is None or not self._accept(group, None, run):
+            return False
+        return new >= old or run.ctx.uniform() < new / old
+
+    def _free_measures(self, dependants: tuple[int, ...], fixed: list[PlacedBox], run: Attempt, draw: bool) -> float | None:
+        """prod_j |F_j| / |R_j| over the dependants in order, F_j the free part of j's region
+        (minus every box outside the group and the group members before j); with `draw`,
+        each dependant is first drawn exactly uniform on F_j. None if some F_j is empty."""
+        ctx, runtimes = run.ctx, self.engine.runtimes
+        fixed = list(fixed)
+        factor = 1.0
+        for j in dependants:
+            rt = runtimes[j]
+            o = ctx.objects[rt.plan.name]
+            half = np.asarray(o.dims, dtype=float) * 0.5
+            ctx.level = j
+            try:
+                region, shift = rt.provider.region(ctx, _support(rt, o.rotation, half), rt.support is not None)
+                poly = region.poly if shift is None else region.poly.translate(shift)
+                lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
+                reach = rt.reach if rt.reach is not None else aabb_reach(o.rotation, half)
+                free = free_space_sampler(poly, obstacles_for(near(fixed, lo, hi, reach), o.rotation, half))  # type: ignore[arg-type]
+            except EmptyRegionError:
+                return None
+            factor *= free.measure / region.measure
+            if draw:
+                o.position = free.sample_one(ctx.rng)
+            fixed.append(rt.placed_box(o, half, ctx))
+        return factor
 
     def _measures(self, dependants: tuple[int, ...], run: Attempt) -> list[Prepared] | None:
         """The current regions of the dependants, or None if one is empty or excludes its object."""
@@ -169,11 +221,12 @@ class GibbsSweeps:
             out.append(region)
         return out
 
-    def _accept(self, group: tuple[int, ...], old: list[Prepared], run: Attempt) -> bool:
-        """The Metropolis test of a group move: regions, collisions, requires, measure ratio."""
+    def _accept(self, group: tuple[int, ...], old: list[Prepared] | None, run: Attempt) -> bool:
+        """The Metropolis test of a group move: regions, collisions, requires, and for a
+        translation (`old` regions given) the ratio of the dependants' region measures."""
         engine, ctx = self.engine, run.ctx
         runtimes = engine.runtimes
-        new = self._measures(group[1:], run)
+        new = self._measures(group[1:], run) if old is not None else []
         if new is None:
             return False
         boxes = run.placed
@@ -193,7 +246,7 @@ class GibbsSweeps:
                 if (check.soft is None or check.soft in ctx.active_requires) and not check.test(ctx):
                     return False
         ratio = 1.0
-        for a, b in zip(old, new):
+        for a, b in zip(old or (), new):
             if a is not b:
                 ratio *= a.measure / b.measure
         return ratio >= 1.0 or ctx.uniform() < ratio

@@ -51,3 +51,42 @@ def distance(a: np.ndarray, b: np.ndarray, labels: Sequence[str]) -> Distance:
     tests = ks_per_coordinate(a, b)
     worst = max(range(len(tests)), key=lambda c: tests[c][0])
     return Distance(tests[worst][0], min(p for _, p in tests), labels[worst])
+
+
+def sweep_diagnostic(
+    path: str, sweeps: Sequence[int], n: int, seed: int = 0, names: Sequence[str] | None = None,
+    relative_to: str | None = None, reference: bool = True,
+) -> list[dict[str, float]]:
+    """Per number of sweeps s: the largest |correlation| across n scenes between a coordinate
+    of the sequential start and the same coordinate after s sweeps (same seed: the chain
+    with s sweeps is a prefix of the chain with more), and, with `reference`, the KS
+    distance to the rejection reference (seed + 1)."""
+    from prsc.sampling import compile_sampler
+
+    def draw(law: str, s: int, seed: int) -> np.ndarray:
+        sampler = compile_sampler(path, law=law, sweeps=max(s, 1))
+        return np.array([coordinates(sampler.sample(seed, i), names, relative_to) for i in range(n)])
+
+    start = draw("sequential", 0, seed)
+    moving = np.ptp(start, axis=0) > 0
+    ref = draw("rejection", 0, seed + 1) if reference else None
+    rows = []
+    for s in sweeps:
+        x = start if s == 0 else draw("joint", s, seed)
+        corr = [abs(np.corrcoef(start[:, c], x[:, c])[0, 1]) for c in np.nonzero(moving)[0]]
+        row = {"sweeps": float(s), "start_correlation": float(max(corr))}
+        if ref is not None:
+            tests = ks_per_coordinate(x[:, moving], ref[:, moving])
+            row["ks_statistic"] = max(d for d, _ in tests)
+            row["ks_pvalue"] = min(p for _, p in tests)
+        rows.append(row)
+    return rows
+
+
+if __name__ == "__main__":  # python -m prsc.sampling.mixing SPEC N [relative_to] [--no-reference]
+    import sys
+
+    argv = [a for a in sys.argv[1:] if a != "--no-reference"]
+    for row in sweep_diagnostic(argv[0], (0, 1, 2, 4, 8), int(argv[1]), relative_to=argv[2] if len(argv) > 2 else None,
+                                reference="--no-reference" not in sys.argv):
+        print("  ".join(f"{k} {v:.4g}" for k, v in row.items()), flush=True)
