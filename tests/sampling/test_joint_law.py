@@ -21,7 +21,7 @@ from prsc.sampling.mixing import coordinates, ks_per_coordinate
 
 DATA = Path(__file__).parent / "data"
 P_MIN = 0.01  # every coordinate of the default law: KS p >= P_MIN; the sequential law: some p < P_MIN
-N = 2000
+N = 1500
 SEEDS = {"rejection": 101, "joint": 202, "sequential": 202}
 SPECS = {
     "aligned_cups": (("cup_1", "cup_2", "cup_3"), None),
