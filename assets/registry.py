@@ -12,29 +12,28 @@ import re
 from typing import Callable
 
 from prsc.assets.camera_body import camera_parts
-from prsc.assets.containers import bin_parts, box_parts, tray_parts
+from prsc.assets.containers import container_parts
 from prsc.assets.furniture import chair_parts, shelf_parts
 from prsc.assets.parts import Part
 from prsc.assets.solids import bottle_parts, cube_parts, cylinder_parts
 from prsc.assets.table import table_parts
-from prsc.assets.vessel import bowl_parts, bucket_parts, cup_parts, plate_parts
+from prsc.geometry.container import ASSET_INTERIORS, asset_interior
 
 Recipe = Callable[[tuple[float, float, float]], tuple[Part, ...]]
 
 
+def _container_recipe(model: str) -> Recipe:
+    """A container asset built from its own interior (prsc.geometry.container.ASSET_INTERIORS)."""
+    return lambda dimensions: container_parts(asset_interior(model, dimensions))
+
+
 PART_ASSETS: dict[str, Recipe] = {
-    "tray": tray_parts,
-    "bin": bin_parts,
-    "box": box_parts,
+    **{model: _container_recipe(model) for model in ASSET_INTERIORS},
     "table": table_parts,
     "shelf": shelf_parts,
     "cube": cube_parts,
     "cylinder": cylinder_parts,
     "bottle": bottle_parts,
-    "bowl": bowl_parts,
-    "cup": cup_parts,
-    "bucket": bucket_parts,
-    "plate": plate_parts,
     "diningchair": chair_parts,
     "chair": chair_parts,
     "camera": camera_parts,
@@ -61,3 +60,8 @@ def is_robot(model: str | None) -> str | None:
         return None
     key = normalise_model(model)
     return key if key in ROBOT_ASSETS else None
+
+
+def is_hollow(model: str | None) -> bool:
+    """Whether a model name is a container asset (built as a floor and walls)."""
+    return model is not None and normalise_model(model) in ASSET_INTERIORS

@@ -8,12 +8,14 @@ from pathlib import Path
 
 import numpy as np
 
+from prsc.assets.containers import container_parts
 from prsc.assets.parts import Part, box, cylinder, sphere
 from prsc.assets.registry import is_robot, part_recipe
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
+from prsc.geometry.container import Interior, declared_interior
 from prsc.mesh_paths import mesh_folders, resolve_mesh
 
 CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
@@ -109,18 +111,29 @@ def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part
     return (Part("mesh", "mesh", obj.dimensions, mesh=str(mesh)),)
 
 
+def object_interior(obj: SceneObject) -> Interior | None:
+    """The container interior the object declares (floor and walls where things rest), if any."""
+    try:
+        return declared_interior(obj.dimensions, obj.properties)
+    except ValueError as error:
+        raise PrscError(f"object {obj.label or obj.name!r}: {error}", obj=obj.label or obj.name) from None
+
+
 def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
     robot = is_robot(obj.model)
     if robot is not None and obj.camera is None:
         return Body(obj, (), MOUNT_INERTIAL, robot, None)
     parts: tuple[Part, ...] | None = None
+    interior = object_interior(obj)
     if obj.model is not None:
         recipe = part_recipe(obj.model)
         if recipe is not None:
-            parts = recipe(obj.dimensions)
+            parts = recipe(obj.dimensions) if interior is None else container_parts(interior)
         else:
-            _warn_unknown_model(obj)
+            _warn_unknown_model(obj)  # an unknown model stays its box, declared interior or not
+    elif interior is not None:
+        parts = container_parts(interior)
     if parts is None:
         if obj.camera is not None and obj.model is None:
             parts = part_recipe("camera")(obj.dimensions)  # type: ignore[misc]

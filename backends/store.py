@@ -13,7 +13,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
-from prsc.backends.files import atomic_copy, atomic_write
+from prsc.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
 
 

@@ -88,7 +88,7 @@ def _part_prim(stage, path: str, part, folder: Path, rgba):
 
 def _mesh_usd(obj_path: str) -> Path:
     """A USD layer beside a normalised OBJ holding it as a Mesh default prim (made once)."""
-    from prsc.backends.files import atomic_write
+    from prsc.files import atomic_write
 
     target = Path(obj_path).with_suffix(".usda")
     if not target.is_file():

@@ -27,6 +27,7 @@ class FrameRecorder:
         self.frames: list[tuple[str, float, np.ndarray]] = []
         self._renderer: OffscreenRenderer | None = None
         self._camera = mujoco.MjvCamera()
+        self._ceiling = -1  # the scene's camera object, found in _setup
 
     def _setup(self, model: mujoco.MjModel) -> None:
         """Create the renderer and aim the free camera at the middle of the non-camera objects."""
@@ -41,6 +42,9 @@ class FrameRecorder:
         # From the robots' front (+y side) looking back at them: the left robot appears on the right.
         self._camera.azimuth = -90.0
         self._camera.elevation = -50.0
+        name = next((o["body"] for o in with_body_names(self.scene)["objects"] if o.get("camera") is not None), None)
+        if name is not None:
+            self._ceiling = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
 
     def __call__(self, label: str, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Render the overview (and, when the controller perceives, the ceiling camera's view)."""
@@ -52,9 +56,7 @@ class FrameRecorder:
             return
         self.frames.append((label, float(data.time), self._renderer.rgb(data, self._camera)))
         if label.startswith("perceive"):
-            name = next(o["body"] for o in with_body_names(self.scene)["objects"] if o.get("camera") is not None)
-            camera = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, name)
-            self.frames.append(("ceiling camera view", float(data.time), self._renderer.rgb(data, camera)))
+            self.frames.append(("ceiling camera view", float(data.time), self._renderer.rgb(data, self._ceiling)))
 
     def close(self) -> None:
         """Release the model's render context."""

@@ -14,7 +14,6 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from prsc.backends.names import with_body_names
 from prsc.backends.runner.grasping import PLACE_CLEARANCE, GraspFailure, HeldCube
 from prsc.backends.runner.motion import Arm, Simulation, Unreachable
 from prsc.backends.runner.perception import CeilingCamera, locate_cube
@@ -69,7 +68,6 @@ class HandoverEpisode:
     """The controller and its ground-truth checks for one compiled scene."""
 
     def __init__(self, scene: dict, model: mujoco.MjModel, data: mujoco.MjData):
-        scene = with_body_names(scene)  # as the harness passes it, also when built directly
         self.scene = scene
         self.roles = find_roles(scene)
         self.model = model

@@ -13,13 +13,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from prsc.commands.executors import cpu_seconds
 
-def _cpu_seconds() -> float:
-    """CPU time (user + system) of this process and its finished children."""
-    import resource
-
-    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
 def _count_files(folder: Path) -> int:
@@ -41,11 +36,11 @@ def bench(spec: str, n: int, jobs: list[int], targets: list[str]) -> list[dict]:
                 out = Path(tmp) / f"{target}-{j}"
                 # Start from a warm store so the run times scenes, not the one-off mesh copy.
                 shutil.copytree(root / "assets", out / root.name / "assets")
-                cpu_before = _cpu_seconds()
+                cpu_before = cpu_seconds()
                 start = time.perf_counter()
                 compile_scenes(spec, [target], n, 0, str(out), jobs=j)
                 seconds = time.perf_counter() - start
-                cpu = _cpu_seconds() - cpu_before
+                cpu = cpu_seconds() - cpu_before
                 files = _count_files(out / root.name / target)
                 rows.append({"target": target, "jobs": j, "scenes": n, "files": files, "seconds": seconds, "cpu": cpu})
                 shutil.rmtree(out)

@@ -36,7 +36,10 @@ from prsc.commands.output_folder import (
     CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
     lock_folder, output_root, prepare_root, record_file, remove_listed, write_manifest,
 )
-from prsc.commands.scene_sources import add_law_argument, read_input, read_scene_file, spec_sampler
+from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, proposal_key
+from prsc.commands.scene_sources import read_input, read_proposal, read_scene_file, spec_sampler
+from prsc.commands.progress import progress_bar
+from prsc.commands.settle import SETTLE_HELP, settle_check, settle_targets
 from prsc.errors import PrscError
 
 
@@ -57,6 +60,8 @@ def add_parser(subparsers: Any) -> None:
                         help="let `with mesh` read absolute paths and paths outside the spec's and --include folders")
     parser.add_argument("--force", action="store_true",
                         help="replace the scenes of another spec or seed in the output folder (only files its manifest lists)")
+    parser.add_argument("--settle-check", action="store_true", help=SETTLE_HELP)
+    add_proposal_argument(parser)
     add_executor_arguments(parser)
     add_law_argument(parser)
 
@@ -80,7 +85,8 @@ class Job:
     # folder's manifest is this run's (a kill between rename and record), else refused.
     adopt_unlisted: bool = True
     meshes_anywhere: bool = False  # --meshes-anywhere
-    law: str = "joint"  # --law: the law a worker compiling the spec again samples
+    law: str | None = None  # --law: the law a worker compiling the spec again samples
+    proposal: dict | None = None  # --proposal: a falsification proposal's JSON (prsc/sampling/proposal.py)
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
     def scene(self, index: int) -> dict:
@@ -88,7 +94,7 @@ class Job:
         if self.scenes is not None:
             return self.scenes[index]
         if self._sampler is None:
-            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs, self.law)
+            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs, self.law, self.proposal)
         return self._sampler(index)
 
     def __getstate__(self) -> dict:
@@ -203,26 +209,15 @@ def _run_parallel(job: Job, indices: Iterable[int], executor: Executor,
 # ------------------------------------------------------------------ the command
 
 
-def _progress(total: int):
-    """A rich progress bar on a terminal, or None."""
-    if total == 0 or not sys.stderr.isatty():
-        return None
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
-    return Progress(TextColumn("compiling"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
-                    console=Console(file=sys.stderr), transient=True)
-
-
 def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
                    include_dirs: Sequence[str] = (), executor: Executor | None = None, force: bool = False,
-                   meshes_anywhere: bool = False, law: str = "joint") -> Path:
+                   meshes_anywhere: bool = False, proposal: dict | None = None, law: str | None = None) -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
     (--include) are searched for a spec's imports and meshes; `executor` (default: `jobs`
     forked local processes) runs the scenes; `force` replaces the listed scenes of another
-    spec or seed; `meshes_anywhere` lets meshes come from any folder."""
+    spec or seed; `meshes_anywhere` lets meshes come from any folder; `proposal` draws from a falsify proposal."""
     from prsc.backends import TARGETS
 
     unknown = [t for t in targets if t not in TARGETS]
@@ -253,7 +248,8 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
         from prsc.sampling import compile_sampler
 
-        compiled = compile_sampler(str(file), include_dirs=include_dirs, law=law)
+        compiled = compile_sampler(str(file), include_dirs=include_dirs, law=law, proposal=proposal_from_json(proposal))
+        law = compiled.law
         program = compiled.program
         sampler = functools.partial(compiled.scene, seed)
         data = read_input(path)
@@ -263,6 +259,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             # The scenes also depend on every imported file (those found through --include
             # too): a change there makes them stale.
             sources.update(read_input(Path(imported)))
+        sources.update(proposal_key(proposal))  # scenes drawn from another proposal are stale
     if executor is None:
         jobs = worker_count(jobs)
     width = max(DEFAULT_WIDTH, len(str(max(n - 1, 0))))
@@ -271,8 +268,8 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     prepare_root(root, targets)
     lock = lock_folder(root)
     try:
-        return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, data, sources, scenes,
-                               sampler, width, created, meshes_anywhere, executor, law)
+        return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, hashlib.sha256(data).hexdigest(),
+                               sources.hexdigest(), scenes, sampler, width, created, meshes_anywhere, executor, proposal, law)
     except PrscError as error:
         raise _at_object(error, program) from None
     finally:
@@ -288,15 +285,14 @@ def _at_object(error: PrscError, program: Any) -> PrscError:
 
 
 def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int, jobs: int,
-                    include_dirs: Sequence[str], force: bool, data: bytes, sources: Any, scenes: list[dict] | None,
+                    include_dirs: Sequence[str], force: bool, digest: str, sources_digest: str, scenes: list[dict] | None,
                     sampler: Callable[[int], dict] | None, width: int, created: Path | None,
-                    meshes_anywhere: bool, executor: Executor | None, law: str = "joint") -> Path:
+                    meshes_anywhere: bool, executor: Executor | None, proposal: dict | None = None,
+                    law: str | None = None) -> Path:
     """The part of compile_scenes that runs while this process holds the folder's lock."""
     from prsc.files import remove_stale_temporaries
 
     remove_stale_temporaries(root, recursive=True)
-    digest = hashlib.sha256(data).hexdigest()
-    sources_digest = sources.hexdigest()
     manifest, entries = load_manifest(root)
     if manifest is not None and (
         manifest.get("spec_sha256") != digest or manifest.get("sources_sha256") != sources_digest
@@ -310,8 +306,8 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         manifest, entries = None, {}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
               include_dirs=tuple(include_dirs), sources=sources_digest, adopt_unlisted=manifest is not None,
-              meshes_anywhere=meshes_anywhere, law=law, _sampler=sampler)
-    listed = Listed(root, {k: dict(v) for k, v in entries.items()})
+              meshes_anywhere=meshes_anywhere, law=law, proposal=proposal, _sampler=sampler)
+    listed = Listed({k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
         # Lazy: -n 10**12 neither builds a list nor checks a file before the first scene.
@@ -322,7 +318,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     reset_model_warnings()  # once per class per run, also in workers forked below
     seen_warnings: set[str] = set()
     total = sum(1 for _ in todo()) if n <= 100_000 else 0  # a progress total only when cheap to count
-    bar = _progress(total)
+    bar = progress_bar(total)
     task = bar.add_task("compile", total=total) if bar else None
     next_checkpoint = [time.monotonic() + CHECKPOINT_SECONDS]
 
@@ -394,6 +390,7 @@ def run(args: argparse.Namespace) -> int:
     targets = list(dict.fromkeys(t.strip() for t in str(args.target).split(",") if t.strip()))
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="fork")
-    compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
-                   args.force, args.meshes_anywhere, args.law)
-    return 0
+    settle_targets(targets, args.settle_check)
+    root = compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
+                          args.force, args.meshes_anywhere, read_proposal(args.proposal, args.file), args.law)
+    return settle_check(root, args.scenes, Path(args.file).suffix in (".json", ".jsonl")) if args.settle_check else 0

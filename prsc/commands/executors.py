@@ -32,6 +32,14 @@ class Executor(Protocol):
             on_result: Callable[[Any], None] | None = None) -> list[Any]: ...
 
 
+def cpu_seconds() -> float:
+    """CPU time (user + system) of this process and its finished children (local workers only)."""
+    import resource
+
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
 def worker_count(jobs: int) -> int:
     """--jobs, capped at the cores this process may use (with a note when capped)."""
     try:
@@ -90,7 +98,6 @@ class LocalExecutor:
 
     jobs: int = 1
     start: str = "spawn"
-    tasks_per_worker: int | None = None  # replace a worker after this many items (bounds its memory)
 
     def map(self, fn, shared, items, on_result=None):
         """Run the items here (jobs 1) or in a process pool; results in item order."""
@@ -106,7 +113,7 @@ class LocalExecutor:
         method = self.start if self.start in multiprocessing.get_all_start_methods() else "spawn"
         context = multiprocessing.get_context(method)
         pool = context.Pool(min(self.jobs, len(batch)), initializer=_local_init, initargs=(fn, shared, os.getpid()),
-                            maxtasksperchild=self.tasks_per_worker)
+                            )
         try:
             while batch:
                 # Pool.imap consumes its whole input at once: hand it bounded batches instead.
@@ -192,8 +199,7 @@ class RayExecutor:
         return results
 
 
-def make_executor(kind: str, jobs: int = 1, address: str | None = None, start: str = "spawn",
-                  tasks_per_worker: int | None = None) -> Executor:
+def make_executor(kind: str, jobs: int = 1, address: str | None = None, start: str = "spawn") -> Executor:
     """The executor `--executor KIND [--address A] [--jobs J]` asks for."""
     if kind not in EXECUTORS:
         raise PrscError(f"unknown executor {kind!r}; choose from {', '.join(EXECUTORS)}")
@@ -202,7 +208,7 @@ def make_executor(kind: str, jobs: int = 1, address: str | None = None, start: s
     if kind == "ray":
         _import_ray()
         return RayExecutor(address=address, cpus=jobs if jobs > 1 else None)
-    return LocalExecutor(jobs=jobs, start=start, tasks_per_worker=tasks_per_worker)
+    return LocalExecutor(jobs=jobs, start=start)
 
 
 def add_executor_arguments(parser: Any) -> None:

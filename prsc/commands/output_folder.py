@@ -188,7 +188,6 @@ def close_manifest(root: Path, entries: dict[int, dict[str, str]], manifest_now:
 class Listed:
     """Whether the manifest lists a scene's file for a target (picklable, for the workers)."""
 
-    root: Path
     entries: dict[int, dict[str, str]]
 
     def __call__(self, index: int, target: str) -> bool:

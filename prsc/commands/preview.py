@@ -133,7 +133,7 @@ def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[st
     labels = [f"scene {s.get('index', k)}" for k, s in enumerate(scenes)]
     import io
 
-    from prsc.backends.files import atomic_write
+    from prsc.files import atomic_write
 
     buffer = io.BytesIO()
     contact_sheet(images, labels, buffer)  # type: ignore[arg-type]

@@ -20,8 +20,8 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
-from prsc.commands.executors import add_executor_arguments
-from prsc.commands.scene_sources import add_law_argument
+from prsc.commands.executors import add_executor_arguments, cpu_seconds
+from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, read_proposal
 from prsc.errors import PrscError
 
 RESULTS = "results.jsonl"
@@ -50,6 +50,7 @@ def add_parser(subparsers) -> None:
                         help=f"end an episode past S simulated seconds as outcome `timeout` (default {DEFAULT_MAX_SIM_SECONDS:g})")
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     add_executor_arguments(parser)
+    add_proposal_argument(parser)
     add_law_argument(parser)
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
@@ -68,11 +69,8 @@ def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: S
     return [spec_sampler(str(source), seed, include_dirs)(0)]
 
 
-def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
-    """(scene, MJCF path) of every compiled scene, in index order."""
-    from prsc.commands.compile import MANIFEST
-
-    manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
+def _compiled(root: Path, manifest: dict, count: int | None) -> list[tuple[dict, Path]]:
+    """(scene, MJCF path) of every compiled scene of the folder's manifest, in index order."""
     pairs = []
     for entry in sorted(manifest["scenes"], key=lambda e: e["index"]):
         if count and entry["index"] >= count:
@@ -82,11 +80,8 @@ def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
     return pairs
 
 
-def _campaign_key(root: Path, args: argparse.Namespace, controller_digest: str) -> dict:
+def _campaign_key(manifest: dict, args: argparse.Namespace, controller_digest: str) -> dict:
     """What makes two runs the same campaign: the compiled scenes, the controller and its limit."""
-    from prsc.commands.compile import MANIFEST
-
-    manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
     from importlib.metadata import PackageNotFoundError, version
 
     try:
@@ -172,7 +167,7 @@ def run(args: argparse.Namespace) -> int:
     gl_backend = choose_gl_backend()
     from rich.console import Console
 
-    from prsc.backends.files import atomic_write
+    from prsc.files import atomic_write
     from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
     from prsc.backends.runner.tasks import EpisodeTask
     from prsc.backends.runner.worker import WorkerConfig, run_task
@@ -180,6 +175,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.commands.executors import make_executor, worker_count
 
     source = Path(args.file)
+    proposal = read_proposal(args.proposal, args.file)
     controller_ref = parse_target(args.controller)
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)
@@ -197,8 +193,11 @@ def run(args: argparse.Namespace) -> int:
     count = args.n if args.n is not None else (0 if is_json else 10)
     root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs, args.include,
                           make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
-                          law=args.law)
-    pairs = _compiled(root, count)
+                          proposal=proposal, law=args.law)
+    from prsc.commands.compile import MANIFEST
+
+    manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
+    pairs = _compiled(root, manifest, count)
     scenes = [scene for scene, _ in pairs]
     if check is not None:
         for scene in scenes:
@@ -207,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
              for k, (scene, mjcf) in enumerate(pairs)]
     compiled = time.perf_counter()
 
-    campaign = _campaign_key(root, args, controller_ref.digest)
+    campaign = _campaign_key(manifest, args, controller_ref.digest)
     records = {k: r for k, r in _recorded(out, campaign).items() if k < len(tasks)}
     todo = [t for t in tasks if t.index not in records]
     atomic_write(out / CAMPAIGN, json.dumps(campaign, indent=1) + "\n")
@@ -227,10 +226,10 @@ def run(args: argparse.Namespace) -> int:
                 appender(answer)
                 progress.advance(bar)
 
-            cpu_before = _cpu_seconds()
+            cpu_before = cpu_seconds()
             executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"),
                          todo, finished)
-            cpu_used = _cpu_seconds() - cpu_before
+            cpu_used = cpu_seconds() - cpu_before
     finally:
         appender.close()
     finished_at = time.perf_counter()
@@ -255,13 +254,6 @@ def run(args: argparse.Namespace) -> int:
     sys.stdout.flush()
     return 0
 
-
-def _cpu_seconds() -> float:
-    """CPU time of this process and its finished children (local workers only)."""
-    import resource
-
-    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
 def _write_strips(tasks: list, records: list[dict], out: Path, count: int) -> None:

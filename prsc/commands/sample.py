@@ -12,7 +12,7 @@ import sys
 from typing import IO, Any
 
 from prsc.commands.outputs import output_file, write_error
-from prsc.commands.scene_sources import add_law_argument
+from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, read_proposal
 from prsc.errors import PrscError
 
 
@@ -32,6 +32,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--walk-length", type=int, default=100, help="hit-and-run steps per sample (default 100)")
     parser.add_argument("--joint", action="store_true", help="the same as --law rejection")
     add_law_argument(parser)
+    add_proposal_argument(parser)
     parser.add_argument("-o", "--output", metavar="PATH", help="write to PATH instead of stdout")
     parser.add_argument("--stats", action="store_true", help="print rejection counts by cause to stderr at the end")
 
@@ -61,8 +62,9 @@ def run(args: argparse.Namespace) -> int:
         if value < 0:
             raise PrscError(f"{option} must be >= 0, got {value}")
     target = None if args.output is None else output_file(args.output)
-    sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length,
-                              law="rejection" if args.joint else args.law)
+    proposal = proposal_from_json(read_proposal(args.proposal, args.file))
+    sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length, joint=args.joint,
+                              law=args.law, proposal=proposal)
     if target is None:
         stats = write_scenes(sampler, args.seed, args.start, args.scenes, sys.stdout)
         sys.stdout.flush()

@@ -100,14 +100,48 @@ def _nesting_place(text: str, limit: int) -> tuple[int, int]:
 
 def add_law_argument(parser: Any) -> None:
     """The --law option of the commands that sample a spec (docs/sampling.md)."""
-    parser.add_argument("--law", choices=("joint", "sequential", "rejection"), default="joint",
+    parser.add_argument("--law", choices=("joint", "sequential", "rejection"), default=None,
                         help="joint (default: the paper's law, by Gibbs sweeps), sequential (objects one at a time, "
-                             "faster), or rejection (the joint law by whole-scene rejection: the exact reference)")
+                             "faster; the default with --proposal), or rejection (the joint law by whole-scene "
+                             "rejection: the exact reference)")
 
 
-def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), law: str = "joint") -> Callable[[int], dict]:
+def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), law: str | None = None,
+                 proposal: dict | None = None) -> Callable[[int], dict]:
     """Scene k of a .prs spec as scene JSON (the sampler is imported only when needed)."""
     from prsc.sampling import compile_sampler
 
-    sampler = compile_sampler(spec, include_dirs=include_dirs, law=law)
+    sampler = compile_sampler(spec, include_dirs=include_dirs, law=law, proposal=proposal_from_json(proposal))
     return lambda index: sampler.scene(seed=seed, index=index)
+
+
+def add_proposal_argument(parser: Any) -> None:
+    """`--proposal DIR/proposal.json` (sample, compile, run)."""
+    parser.add_argument("--proposal", metavar="JSON", default=None,
+                        help="draw scenes from a proposal `prsc falsify` learnt (DIR/proposal.json): "
+                             "the hard cases, still satisfying the spec")
+
+
+def read_proposal(path: str | None, source: str) -> dict | None:
+    """The JSON of --proposal (validated), or None; an error when the input is scene JSON, not a spec."""
+    if path is None:
+        return None
+    if Path(source).suffix in (".json", ".jsonl"):
+        raise PrscError("--proposal draws new scenes from a .prs spec; it does not apply to scene JSON")
+    from prsc.sampling.proposal import load_proposal
+
+    return load_proposal(path).to_json()
+
+
+def proposal_key(data: dict | None) -> bytes:
+    """The bytes that identify a proposal in a folder's source digest (none without one)."""
+    return b"" if data is None else json.dumps(data, sort_keys=True).encode("utf-8")
+
+
+def proposal_from_json(data: dict | None) -> Any:
+    """A Proposal from its JSON, or None."""
+    if data is None:
+        return None
+    from prsc.sampling.proposal import Proposal
+
+    return Proposal.from_json(data)

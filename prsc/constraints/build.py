@@ -28,7 +28,7 @@ BUILDERS: dict[str, Builder] = {
     "at": lambda r, v, s: rows.rows_at(v[0], r.label_id, r.span),
     "beyond": lambda r, v, s: rows.rows_beyond(v[0], v[1], v[2], r.label_id, r.span),
     "in": lambda r, v, s: rows.rows_in(v[0], r.option("completely"), s, r.label_id, r.span),
-    "on": lambda r, v, s: rows.rows_on(v[0], r.option("completely"), s, r.label_id, r.span),
+    "on": lambda r, v, s: rows.rows_on(v[0], r.option("completely"), s, r.label_id, r.span, bool(r.option("inside_asset"))),
     "direction": lambda r, v, s: rows.rows_direction(r.option("relation"), v[0], v[1] if len(v) > 1 else None, s, r.label_id, r.span),
     "aligned": lambda r, v, s: rows.rows_aligned(v[0], r.option("axis"), r.label_id, r.span),
     "workspace": lambda r, v, s: rows.rows_in(v[0], True, s, r.label_id, r.span),

@@ -22,7 +22,7 @@ class SceneContext:
     values drawn while placing objects k, k+1, ...
     """
 
-    __slots__ = ("rng", "_buffer", "draws", "variables", "objects", "journal", "level", "active_requires")
+    __slots__ = ("rng", "_buffer", "draws", "variables", "objects", "journal", "level", "active_requires", "proposal")
 
     def __init__(self, rng: np.random.Generator) -> None:
         self.rng = rng
@@ -33,6 +33,8 @@ class SceneContext:
         self.journal: list[tuple[int, int, Any]] = []  # (level, 0 draw / 1 variable, key)
         self.level = -1
         self.active_requires: frozenset[int] = frozenset()
+        # A falsification proposal's per-scene state (prsc/sampling/proposal.py), or None: the spec's law.
+        self.proposal: Any = None
 
     def uniform(self) -> float:
         """A uniform draw from [0, 1)."""
@@ -58,6 +60,8 @@ class SceneContext:
 
     def rollback(self, level: int) -> None:
         """Forget every draw and variable memoised while placing objects >= level."""
+        if self.proposal is not None:
+            self.proposal.rollback(level)
         journal = self.journal
         while journal and journal[-1][0] >= level:
             _, kind, key = journal.pop()

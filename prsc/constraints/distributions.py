@@ -23,12 +23,14 @@ def sampler_for(e: ir.Distribution, args: list[Fn], weights: list[Fn]) -> Fn:
 
     if kind == "range":
         lo_f, hi_f = args
+        site = "?" if span is None else f"{span.line}:{span.column}"  # a proposal's key for this range
 
         def draw_range(ctx: SceneContext) -> float:
             lo, hi = num(lo_f, ctx, "a range bound"), num(hi_f, ctx, "a range bound")
             if hi < lo:
                 raise error_at(f"empty range ({lo}, {hi})", span)
-            return lo + (hi - lo) * ctx.uniform()
+            u = ctx.uniform() if ctx.proposal is None else ctx.proposal.unit(site, ctx)
+            return lo + (hi - lo) * u
 
         return draw_range
     if kind == "normal":

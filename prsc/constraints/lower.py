@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.analysis import pinned_point, region_rules
+from prsc.constraints.containers import containers_rested_in
 from prsc.constraints.diagnostics import explain_empty, numeric_failure
 from prsc.constraints.evaluate import Fn
 from prsc.constraints.model import REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
@@ -84,6 +85,7 @@ def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan)
         support = Support(None, np.array(dims) * 0.5, orientation.bound_mode)  # type: ignore[union-attr]
     me = ObjectValue(name, obj.class_name, obj.span, None, rotation, dims, dict(static_props))
 
+    rests_in = containers_rested_in(low, obj)  # first: it refuses a container interior that varies
     rules: list[Rule] = []
     for spec in obj.specifiers:
         rule = specifier_rule(low, obj, spec, support, me)
@@ -124,6 +126,7 @@ def _lower_object(low: LoweringState, obj: ir.ObjectDecl, requires: RequirePlan)
         depends_on=tuple(obj.depends_on),
         static_position=static_position,
         static_support=support,
+        rests_in=rests_in,
     )
 
 

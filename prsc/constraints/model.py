@@ -82,7 +82,7 @@ class Rule:
 
     def option(self, name: str, default: Any = None) -> Any:
         """The value of one option."""
-        return dict(self.options).get(name, default)
+        return next((value for key, value in self.options if key == name), default)
 
     @property
     def static(self) -> bool:
@@ -159,6 +159,8 @@ class ObjectPlan:
     static_position: np.ndarray | None = None
     # The object's support function when it is the same in every scene.
     static_support: Support | None = None
+    # Containers this object rests inside (`on X`, X declaring an interior): not collision obstacles.
+    rests_in: tuple[int, ...] = ()
 
     @property
     def rules(self) -> tuple[Rule, ...]:

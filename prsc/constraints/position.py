@@ -37,7 +37,9 @@ def _kind_args_options(spec: ir.Specifier) -> tuple[str, tuple[ir.Expr, ...], tu
     if isinstance(spec, ir.In):
         return "in", (spec.region,), (("completely", spec.completely),)
     if isinstance(spec, ir.On):
-        return "on", (spec.target,), (("completely", spec.completely),)
+        # inside_asset: `completely on` a container asset that declares no interior means
+        # inside it (specifiers.interior_of); the relaxed rule of the baseline keeps that.
+        return "on", (spec.target,), (("completely", spec.completely), ("inside_asset", spec.completely))
     if isinstance(spec, ir.Direction):
         if spec.relation not in rows.DIRECTION_AXES:
             raise PrscError(f"unknown direction {spec.relation!r}", spec.span)
@@ -88,7 +90,8 @@ def specifier_rule(low: LoweringState, obj: ir.ObjectDecl, spec: ir.Specifier, s
     values = tuple(low.compiler.compile(arg).fn for arg in args)
     rule = _with_template(low, Rule(kind, label, spec.span, args, options, None, None, values), support, me)
     if kind == "on" and rule.option("completely"):
-        relaxed = _with_template(low, Rule(kind, label, spec.span, args, (("completely", False),), None, None, values), support, me)
+        relaxed_options = (("completely", False), ("inside_asset", True))
+        relaxed = _with_template(low, Rule(kind, label, spec.span, args, relaxed_options, None, None, values), support, me)
         rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
     return rule
 

@@ -3,7 +3,7 @@
 prsc/constraints/<model>_reach.json holds, in the arm base's frame (origin at the bottom
 centre of the Robot box, +y ahead, +z up), convex cells inside the set of points the
 tool centre reaches with the gripper pointing down (the handover's grasp). It is
-computed once from the arm's kinematics by `python -m prsc.backends.reach` (IK over a
+computed once from the arm's kinematics by `python -m prsc.commands.reach` (IK over a
 grid) and checked against the IK by tests/constraints/test_reach.py; docs/sampling.md
 says how much of the reachable set it keeps.
 """

@@ -13,6 +13,8 @@ import numpy as np
 from prsc.constraints.model import Support
 from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
+from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES, Interior, asset_interior, declared_interior
+from prsc.ir.models import model_of
 from prsc.geometry.polytope import Polytope
 
 _EYE = np.eye(3)
@@ -88,10 +90,15 @@ def rows_in(region: Any, completely: bool, support: Support, label: int, span: S
     return Polytope(poly.A, b, poly.C, poly.d, np.full(len(b), label), np.full(len(poly.d), label))
 
 
-def rows_on(target: Any, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:
-    """`[completely] on X` for an object, a planar region or a point."""
+def rows_on(target: Any, completely: bool, support: Support, label: int, span: Span | None,
+            inside_asset: bool = False) -> Polytope:
+    """`[completely] on X` for an object, a planar region or a point (`inside_asset`: on the
+    floor of a container asset that declares no interior, as `completely on` asks)."""
     if isinstance(target, ObjectValue):
         pos, rot, dims = _placed(target, span)
+        interior = interior_of(target, span, inside_asset)
+        if interior is not None:
+            return _rows_in_container(pos, rot, interior, completely, support, label)
         u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
         top = pos + n * (dims[2] * 0.5)
         s = support(np.stack([n, u, v]))
@@ -106,6 +113,37 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
     if point is not None:
         return _point_rows(point + _UP * float(support(_UP[None, :])[0]), label)
     raise PrscError("'on' needs an object, a planar region or a point", span)
+
+
+def interior_of(target: ObjectValue, span: Span | None, inside_asset: bool = False) -> Interior | None:
+    """The container interior the object's class declares (docs/language.md, "Containers"), if any;
+    with `inside_asset` (for `completely on`), else the interior of the container asset the class uses."""
+    if any(k in target.property_fns and k not in target.props for k in INTERIOR_PROPERTIES):
+        raise PrscError(f"the interior of {target.name} ({', '.join(INTERIOR_PROPERTIES)}) must be constants", span)
+    declared = {k: target.props[k] for k in INTERIOR_PROPERTIES if k in target.props}
+    if not declared:
+        # A class that declares no interior but is built as a hollow container asset (the
+        # original project's model library): `completely on` it means inside it, on the
+        # floor the backends build, never on the rim it would fall from. A bare `on` keeps
+        # the rim, since its footprint may cross the walls the sampler does not know.
+        return asset_interior(model_of(target.props, target.class_name), target.dims) if inside_asset else None  # type: ignore[arg-type]
+    try:
+        return declared_interior(target.dims, declared)  # type: ignore[arg-type]
+    except ValueError as error:
+        raise PrscError(f"{target.name}: {error}", span) from None
+
+
+def _rows_in_container(
+    pos: np.ndarray, rot: np.ndarray, interior: Interior, completely: bool, support: Support, label: int
+) -> Polytope:
+    """On a container: rest on its floor's top, centre (footprint if completely) inside the walls."""
+    u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
+    normals, offsets = interior.edges()
+    a = normals[:, :1] * u + normals[:, 1:] * v
+    b = a @ pos + offsets - (support(a) if completely else 0.0)
+    floor = pos + n * interior.floor_top
+    rest = float(n @ floor + support(n[None, :])[0])
+    return Polytope(a, b, n[None, :], np.array([rest]), np.full(len(b), label), np.full(1, label))
 
 
 def _rows_on_surface(region: RegionValue, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from prsc.constraints.context import SceneContext
@@ -12,14 +14,20 @@ from prsc.errors import Span
 from prsc.ir import model as ir
 
 
+@lru_cache(maxsize=32)
+def _lines(text: str) -> tuple[str, ...]:
+    """A source file's lines, split once per file (labels ask for many spans of the same file)."""
+    return tuple(text.splitlines())
+
+
 def source_text(program: ir.Program, span: Span | None, fallback: str = "") -> str:
     """The source text a span covers, on one line (whitespace collapsed), from the IR's own copy of the files."""
     if span is None:
         return fallback
-    text = dict(program.sources).get(span.path)
+    text = next((text for path, text in program.sources if path == span.path), None)
     if text is None:
         return fallback
-    lines = text.splitlines()
+    lines = _lines(text)
     if span.line > len(lines):
         return fallback
     if span.end_line == span.line:

@@ -66,15 +66,17 @@ def inscribed_half(half: np.ndarray, mode: str) -> np.ndarray:
 
 
 def near(
-    placed: list[PlacedBox], lo: np.ndarray, hi: np.ndarray, reach: tuple[float, float, float], tol: float = CONTACT_TOL
+    placed: list[PlacedBox], lo: np.ndarray, hi: np.ndarray, reach: tuple[float, float, float], tol: float = CONTACT_TOL,
+    containers: tuple[int, ...] = (),
 ) -> list[PlacedBox]:
-    """Placed boxes that a box with AABB half extents `reach`, centred anywhere in [lo, hi], could hit."""
+    """Placed boxes that a box with AABB half extents `reach`, centred anywhere in [lo, hi], could hit
+    (the `containers` it rests inside excepted: their walls, not their boxes, bound it)."""
     lx, ly, lz = lo.tolist()
     hx, hy, hz = hi.tolist()
     rx, ry, rz = reach
     out = []
     for q in placed:
-        if q.allow:
+        if q.allow or q.index in containers:
             continue
         (cx, cy, cz), (ex, ey, ez) = q.center, q.reach
         if (

@@ -39,6 +39,7 @@ from prsc.geometry.sampler import UniformSampler
 from prsc.sampling.attempt import Attempt, Failure, Limits
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
 from prsc.sampling.gibbs import GibbsSweeps
+from prsc.sampling.proposal import Proposal
 from prsc.sampling.regions import Prepared
 from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params
 from prsc.sampling.seeds import scene_rng
@@ -66,6 +67,7 @@ class SequentialSampler:
         walk_length: int = 100,
         joint: bool = False,
         limits: Limits | None = None,
+        proposal: Proposal | None = None,
         sweeps: int = 0,
     ) -> None:
         if method not in ("exact", "hit-and-run"):
@@ -75,6 +77,8 @@ class SequentialSampler:
         self.walk_length = int(walk_length)
         self.joint = joint
         self.limits = limits or Limits()
+        # A falsification proposal (prsc/sampling/proposal.py): reweights region and range draws.
+        self.proposal = proposal
         self.runtimes = build_runtimes(cprog)
         self._index = {rt.plan.name: rt.plan.index for rt in self.runtimes}
         # Requires checked by rejection, per object (the object they are checked after).
@@ -94,6 +98,8 @@ class SequentialSampler:
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed`; PrscError if it cannot be sampled within the limits."""
         ctx = SceneContext(scene_rng(seed, index))
+        if self.proposal is not None and self.method == "exact":
+            ctx.proposal = self.proposal.scene_state()
         run = Attempt(ctx, RejectionStats(scenes=1), self.limits)
         attempts = self.limits.joint_attempts if self.joint else self.limits.scene_attempts
         tried = 0  # the work budget may end the attempts early: the message says how many ran
@@ -222,7 +228,7 @@ class SequentialSampler:
         """Draw the object's position (and late rotation); True when accepted."""
         ctx = run.ctx
         rng = ctx.rng
-        method, walk = self.method, self.walk_length
+        method = self.method
         reach = rt.reach
         if reach is None:
             mode = "exact" if obj.rotation is not None else rt.plan.orientation.bound_mode  # type: ignore[union-attr]
@@ -231,10 +237,10 @@ class SequentialSampler:
         candidates: list[PlacedBox] = []
         if run.placed and not self.joint and not allow:
             lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
-            candidates = near(run.placed, lo, hi, reach)
+            candidates = near(run.placed, lo, hi, reach, containers=rt.plan.rests_in)
         checks = () if self.joint else tuple(c for c in rt.plan.checks if c.soft is None or c.soft in ctx.active_requires)
         if not candidates and not checks:
-            p = region.draw(rng, method, walk)
+            p = self._region_draw(rt, region, run)
             obj.position = p if shift is None else p + shift
             rt.late_rotation(obj, ctx)
             return True
@@ -245,6 +251,8 @@ class SequentialSampler:
                 return self._blocked(rt, candidates, run)
             # The pieces are exactly the collision-free positions (the obstacles' interiors
             # are where the OBB test says "collides"): only requires can reject a draw.
+            if ctx.proposal is not None:
+                ctx.proposal.spec_position(rt.plan.name, rt.plan.index)
             for _ in range(self.limits.free_draws):
                 if self._accept(rt, obj, half, free.sample_one(rng), [], checks, run):
                     return True
@@ -253,7 +261,7 @@ class SequentialSampler:
             run.draws += 1
             if run.draws > self.limits.draw_budget:
                 return False
-            p = region.draw(rng, method, walk)
+            p = self._region_draw(rt, region, run)
             if self._accept(rt, obj, half, p if shift is None else p + shift, candidates, checks, run):
                 return True
         if not candidates or method != "exact":
@@ -273,11 +281,19 @@ class SequentialSampler:
             free = free_space_sampler(poly, obstacles_for(candidates, rotation, obstacle_half))  # type: ignore[arg-type]
         except EmptyRegionError:
             return self._blocked(rt, candidates, run)
+        if ctx.proposal is not None:
+            ctx.proposal.spec_position(rt.plan.name, rt.plan.index)
         for _ in range(self.limits.free_draws):
             run.draws += 1
             if self._accept(rt, obj, half, free.sample_one(rng), candidates, checks, run):
                 return True
         return False
+
+    def _region_draw(self, rt: ObjectRuntime, region: Prepared, run: Attempt) -> np.ndarray:
+        """A position on the region: the spec's law, or the falsification proposal's (ratio recorded)."""
+        if run.ctx.proposal is None:
+            return region.draw(run.ctx.rng, self.method, self.walk_length)
+        return run.ctx.proposal.position(rt.plan.name, rt.plan.index, region, run.ctx)
 
     def _all_static(self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox]) -> bool:
         """Whether the region and every candidate obstacle are the same objects in every scene."""
@@ -327,7 +343,8 @@ class SequentialSampler:
         for i, q in enumerate(placed):
             if q.allow:
                 continue
-            others = near(placed[:i], np.array(q.center), np.array(q.center), q.reach)
+            others = near(placed[:i], np.array(q.center), np.array(q.center), q.reach,
+                          containers=self.runtimes[q.index].plan.rests_in)
             hit = first_hit(others, q.box.center, q.box.rotation, q.box.half_extents, q.reach)
             if hit is not None:
                 run.stats.add(COLLISION)

@@ -99,7 +99,7 @@ class RejectionSampler:
         rt.finish(obj, ctx)
         box = rt.placed_box(obj, half, ctx)
         if not box.allow and placed:
-            candidates = near(placed, obj.position, obj.position, box.reach)
+            candidates = near(placed, obj.position, obj.position, box.reach, containers=rt.plan.rests_in)
             if first_hit(candidates, obj.position, obj.rotation, half, box.reach) is not None:
                 return COLLISION
         placed.append(box)

@@ -13,9 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue
+from prsc.constraints.values import DIMENSIONS, ObjectValue, OrientedPoint, RegionValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.rotations import matrix_to_quat
+from prsc.ir.models import model_of
 from prsc.limits import mass_problem, size_problem
 
 FORMAT = "prsc-scene"
@@ -25,8 +26,6 @@ ROBOT_MODELS = frozenset({"panda"})
 # Models fixed in the world unless the spec says `static False`: robot arms are mounted,
 # cameras stay where they were sampled, tables are furniture.
 STATIC_MODELS = ROBOT_MODELS | {"camera", "table"}
-# Asset names the backends know (docs/scene-json.md); a class of that name uses it.
-KNOWN_MODELS = frozenset({"panda", "tray", "table", "cube", "cylinder", "bowl", "cup", "camera"})
 SHAPES = {"cuboid": "box", "box": "box", "cylinder": "cylinder", "sphere": "sphere", "mesh": "mesh"}
 DEFAULT_CAMERA = {"fovy": 60.0, "resolution": [640, 480]}
 DEFAULT_COLOR = (0.5, 0.5, 0.5, 1.0)
@@ -129,19 +128,6 @@ def json_value(value: Any) -> Any:
     return str(value)
 
 
-def model_of(props: dict[str, Any], class_name: str) -> str | None:
-    """The asset name: `model`, else the compat `model_name` in lower case, else a known class name."""
-    model = props.get("model")
-    if model is None:
-        model = props.get("model_name")
-    if model is None:
-        guess = class_name.lower()
-        return guess if guess in KNOWN_MODELS else None
-    if not isinstance(model, str):
-        raise PrscError(f"model of {class_name} must be a string, got {model!r}")
-    return model.strip().lower() or None
-
-
 def shape_of(props: dict[str, Any]) -> str:
     """box | cylinder | sphere | mesh from `shape` or the compat `shape_type`."""
     shape = props.get("shape", "box")
@@ -188,7 +174,7 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
     if static is None:
         static = is_camera or model in STATIC_MODELS
     w, l, h = obj.dims
-    for prop, value in zip(("width", "length", "height"), obj.dims):
+    for prop, value in zip(DIMENSIONS, obj.dims):
         problem = size_problem(float(value))
         if problem:
             raise PrscError(f"{prop} of {obj.name} {problem}")
@@ -245,7 +231,7 @@ def scene_json(
 
 def object_template(name: str, class_name: str, props: dict[str, Any], span: Span | None = None) -> dict[str, Any]:
     """Everything but the pose of an object whose properties are the same in every scene."""
-    dims = tuple(float(props[d]) for d in ("width", "length", "height"))
+    dims = tuple(float(props[d]) for d in DIMENSIONS)
     stand_in = ObjectValue(name, class_name, span, np.zeros(3), np.eye(3), dims, dict(props))  # type: ignore[arg-type]
     return object_json(stand_in)
 

@@ -57,9 +57,9 @@ def test_one_atomic_write_helper_and_one_options_setter():
 
 
 def test_backends_never_import_the_commands():
-    """Layering: backends read scene JSON, never spec text, the IR or prsc.commands."""
+    """Layering: backends read scene JSON, never spec text, the IR, the constraint IR, the sampler or prsc.commands."""
     import re
 
     offenders = {path for path, text in _sources().items() if path.startswith("backends/")
-                 and re.search(r"^\s*(from|import) prsc\.(commands|ir|syntax)\b", text, re.M)}
+                 and re.search(r"^\s*(from|import) prsc\.(commands|ir|syntax|constraints|sampling)\b", text, re.M)}
     assert offenders == set()

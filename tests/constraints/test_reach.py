@@ -25,7 +25,7 @@ REACH_SPEC = REPO / "specs" / "table_cube_reach.prs"
 
 @pytest.fixture(scope="module")
 def arm():
-    from prsc.backends.reach import TopDownReach
+    from prsc.commands.reach import TopDownReach
 
     return TopDownReach()
 
@@ -35,7 +35,7 @@ def _points(a: np.ndarray, b: np.ndarray, n: int, seed: int) -> np.ndarray:
 
 
 def test_the_cell_is_what_the_script_derives_from_its_ik_rays():
-    from prsc.backends import reach
+    from prsc.commands import reach
 
     data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
     rays = {(k, j): (None if lo is None else (lo, hi)) for k, j, lo, hi in data["rays"]}

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from prsc.backends.names import with_body_names
 from prsc.backends.runner.handover import HandoverEpisode
 from prsc.backends.runner.harness import fresh_data, load_model
 from prsc.backends.runner.perception import colour_mask, deproject, intrinsics_for, locate_cube
@@ -11,7 +12,7 @@ from prsc.backends.runner.perception import colour_mask, deproject, intrinsics_f
 
 def _settled(scene, mjcf):
     model = load_model(mjcf)
-    episode = HandoverEpisode(scene, model, fresh_data(model))
+    episode = HandoverEpisode(with_body_names(scene), model, fresh_data(model))  # as the harness passes it
     episode.sim.wait(0.3)
     return episode
 

@@ -58,3 +58,12 @@ def test_executor_ray_without_ray_is_a_clear_error(tmp_path, monkeypatch, capsys
     assert main(["compile", str(CUBES), *INCLUDE, "-o", str(tmp_path / "out"), "--executor", "ray"]) == 2
     assert "--executor ray needs Ray: pip install 'prsc[ray]'" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_falsify_on_ray_matches_the_local_one(cluster, tmp_path):
+    corner = str(REPO / "tests" / "data" / "corner_controller.py") + ":corner"
+    common = [str(REPO / "specs" / "table_cube.prs"), "--budget", "6", "--rounds", "2", "--seed", "1", "--controller", corner]
+    assert main(["falsify", *common, "-o", str(tmp_path / "local"), "--jobs", "2"]) == 0
+    assert main(["falsify", *common, "-o", str(tmp_path / "ray"), "--executor", "ray", "--address", cluster]) == 0
+    assert _records(tmp_path / "local" / "results.jsonl") == _records(tmp_path / "ray" / "results.jsonl")
+    assert (tmp_path / "local" / "proposal.json").read_bytes() == (tmp_path / "ray" / "proposal.json").read_bytes()

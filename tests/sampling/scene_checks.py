@@ -406,10 +406,17 @@ def check_scene(program: ir.Program, scene: dict) -> SceneCheck:
             problems.tried(f"{body.name}: workspace", lambda: _workspace(ev, program.workspace, body))
     # Collisions.
     allowed = {n for n, b in bodies.items() if b.data.get("properties", {}).get("allowCollisions")}
+    # An object `on` a container rests inside the container's box: its walls bound it (above).
+    inside = {
+        frozenset((decl.name, spec.target.name))
+        for decl in program.objects for spec in decl.specifiers
+        if isinstance(spec, ir.On) and isinstance(spec.target, ir.ObjectRef)
+        and container_interior(bodies[spec.target.name], spec.completely) is not None
+    }
     items = list(bodies.values())
     for i, a in enumerate(items):
         for b in items[:i]:
-            if a.name in allowed or b.name in allowed:
+            if a.name in allowed or b.name in allowed or frozenset((a.name, b.name)) in inside:
                 continue
             ra = np.abs(a.r) @ a.half
             rb = np.abs(b.r) @ b.half
@@ -451,6 +458,63 @@ def _workspace(ev: Evaluator, workspace: ir.Expr, body: Body) -> str | None:
     return f"sticks out of the workspace by {out:.3g} m" if out > TOL else None
 
 
+def _clamp(value: float, low: float, high: float) -> float:
+    return max(low, min(high, value))
+
+
+# The container assets' own floors and walls (docs/backends.md, "Container assets"): the
+# interior `completely on` uses when the class declares none.
+ASSET_INTERIORS = {
+    "tray": lambda w, l, h: ("box", _clamp(0.2 * h, 0.005, 0.015), _clamp(0.04 * min(w, l), 0.003, 0.012)),
+    "bin": lambda w, l, h: ("box", _clamp(0.05 * h, 0.005, 0.015), _clamp(0.03 * min(w, l), 0.004, 0.015)),
+    "box": lambda w, l, h: ("box", *(_clamp(0.02 * min(w, l), 0.003, 0.01),) * 2),
+    "bowl": lambda w, l, h: ("round", max(0.15 * h, 0.002), max(0.06 * min(w, l) / 2, 0.002)),
+    "cup": lambda w, l, h: ("round", max(0.08 * h, 0.002), max(0.08 * min(w, l) / 2, 0.002)),
+    "bucket": lambda w, l, h: ("round", max(0.05 * h, 0.002), max(0.04 * min(w, l) / 2, 0.002)),
+    "plate": lambda w, l, h: ("round", max(0.4 * h, 0.002), max(0.05 * min(w, l) / 2, 0.002)),
+}
+
+
+def container_interior(target: Body, completely: bool = False) -> tuple[float, list[tuple[np.ndarray, float]]] | None:
+    """A container's floor top (above its centre) and interior edges (local normal, offset):
+    the declared one, or for `completely on` the container asset's own.
+
+    Written from docs/language.md "Containers", apart from prsc's own code: floor at most
+    half the height; walls at most a quarter of the short side, or 0.3 of a round one's
+    radius, whose interior is the 16-gon of its wall slabs' inner faces."""
+    props = target.data.get("properties", {})
+    if "floorThickness" not in props:
+        recipe = ASSET_INTERIORS.get(target.data.get("model") or "") if completely else None
+        if recipe is None:
+            return None
+        shape, floor, wall = recipe(*(float(v) for v in target.dims))
+        props = {"container": shape, "floorThickness": floor, "wallThickness": wall}
+    w, l, h = (float(v) for v in target.dims)
+    if props["container"] == "round":
+        radius = min(w, l) / 2
+        wall = min(float(props["wallThickness"]), 0.3 * radius)
+        edges = [(np.array([math.cos(2 * math.pi * k / 16), math.sin(2 * math.pi * k / 16)]), radius - wall) for k in range(16)]
+    else:
+        wall = min(float(props["wallThickness"]), 0.25 * min(w, l))
+        edges = [(np.array(m, dtype=float), c) for m, c in
+                 (((1, 0), w / 2 - wall), ((-1, 0), w / 2 - wall), ((0, 1), l / 2 - wall), ((0, -1), l / 2 - wall))]
+    return -h / 2 + min(float(props["floorThickness"]), h / 2), edges
+
+
+def _on_floor(body: Body, target: Body, completely: bool) -> str | None:
+    """`on X` for a container X: resting on its floor, centre (footprint) inside its walls."""
+    floor_top, edges = container_interior(target, completely)  # type: ignore[misc]
+    n = target.r[:, 2]
+    gap = float(n @ (body.p - target.p)) - floor_top - body.s(n)
+    if abs(gap) > TOL:
+        return f"not resting on the floor of {target.name} (gap {gap:.3g})"
+    for m, c in edges:
+        a = m[0] * target.r[:, 0] + m[1] * target.r[:, 1]
+        if float(a @ (body.p - target.p)) > c - (body.s(a) if completely else 0.0) + TOL:
+            return f"outside the interior of {target.name}"
+    return None
+
+
 def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | None:
     """A description of how the body violates one specifier, or None."""
     p = body.p
@@ -461,6 +525,8 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         return None
     if isinstance(spec, ir.On):
         target = ev.ev(spec.target)
+        if isinstance(target, Body) and container_interior(target, spec.completely) is not None:
+            return _on_floor(body, target, spec.completely)
         if isinstance(target, Body):
             n, u, v = target.r[:, 2], target.r[:, 0], target.r[:, 1]
             top = target.p + n * target.dims[2] / 2

@@ -97,7 +97,8 @@ def test_allow_collisions_and_facing_toward(tmp_path):
     assert not check_scenes(program, scenes)
     for scene in scenes:
         ghost, c = scene["objects"][1], scene["objects"][2]
-        assert ghost["properties"] == {"allowCollisions": True}
+        # A Box declares its interior (the model library) besides the allowCollisions set here.
+        assert ghost["properties"] == {"allowCollisions": True, "container": "box", "floorThickness": 0.006, "wallThickness": 0.006}
         w, x, y, z = c["quaternion"]
         assert abs(x) < 1e-12 and abs(y) < 1e-12  # a yaw only
 

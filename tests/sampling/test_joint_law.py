@@ -21,7 +21,8 @@ from prsc.sampling.mixing import coordinates, ks_per_coordinate
 
 DATA = Path(__file__).parent / "data"
 P_MIN = 0.01  # every coordinate of the default law: KS p >= P_MIN; the sequential law: some p < P_MIN
-N = 1500
+N = 2000  # scenes per law and spec
+CHUNKS = 4  # each law's scenes are drawn in index chunks, spread over the two workers
 SEEDS = {"rejection": 101, "joint": 202, "sequential": 202}
 SPECS = {
     "aligned_cups": (("cup_1", "cup_2", "cup_3"), None),
@@ -29,19 +30,22 @@ SPECS = {
 }
 
 
-def _planar(spec: str, law: str) -> np.ndarray:
-    """x and y of the spec's objects in N scenes of one law (z is fixed by `on`)."""
+def _planar(spec: str, law: str, start: int) -> np.ndarray:
+    """x and y of the spec's objects in scenes start .. start + N/CHUNKS - 1 of one law (z is fixed by `on`)."""
     names, relative_to = SPECS[spec]
     sampler = compile_sampler(DATA / f"{spec}.prs", law=law)
-    rows = [coordinates(sampler.sample(SEEDS[law], i), names, relative_to) for i in range(N)]
-    return np.array(rows).reshape(N, len(names), 3)[:, :, :2].reshape(N, -1)
+    n = N // CHUNKS
+    rows = [coordinates(sampler.sample(SEEDS[law], i), names, relative_to) for i in range(start, start + n)]
+    return np.array(rows).reshape(n, len(names), 3)[:, :, :2].reshape(n, -1)
 
 
 @pytest.fixture(scope="module")
 def samples() -> dict[tuple[str, str], np.ndarray]:
-    jobs = [(spec, law) for spec in SPECS for law in SEEDS]
+    jobs = [(spec, law, c * (N // CHUNKS)) for spec in SPECS for law in SEEDS for c in range(CHUNKS)]
     with ProcessPoolExecutor(max_workers=2, mp_context=get_context("fork")) as pool:
-        return dict(zip(jobs, pool.map(_planar, *zip(*jobs))))
+        parts = list(pool.map(_planar, *zip(*jobs)))
+    return {(spec, law): np.vstack([p for (s, w, _), p in zip(jobs, parts) if (s, w) == (spec, law)])
+            for spec in SPECS for law in SEEDS}
 
 
 @pytest.mark.parametrize("spec", sorted(SPECS))

@@ -110,3 +110,26 @@ def test_checker_counts_relations_and_fails_on_one_it_never_checked(tmp_path):
     scenes = [Sampler(table_cube, "exact").scene(0, i) for i in range(3)]
     full = check_scenes(table_cube, scenes)
     assert not full and not full.unchecked and full.checked > 3 * 20
+
+
+def test_checker_wants_a_cube_on_a_container_on_its_floor_inside_the_walls():
+    program = compile_program(str(REPO / "specs" / "table_cube.prs"), ())
+    scene = Sampler(program, "exact").scene(0, 0)
+    assert check_scene(program, scene) == []
+    objects = {o["name"]: o for o in scene["objects"]}
+    tray = objects["tr_1"]
+
+    on_rim = copy.deepcopy(scene)  # the old meaning: resting on the tray's box top
+    cube = next(o for o in on_rim["objects"] if o["name"] == "c1")
+    cube["position"][2] = tray["position"][2] + tray["dimensions"][2] / 2 + cube["dimensions"][2] / 2
+    assert any("c1" in p and "floor of tr_1" in p for p in check_scene(program, on_rim))
+
+    on_wall = copy.deepcopy(scene)  # over the left wall: inside the tray's box, not its walls
+    cube = next(o for o in on_wall["objects"] if o["name"] == "c1")
+    cube["position"][0] = tray["position"][0] - tray["dimensions"][0] / 2 + cube["dimensions"][0] / 2
+    assert any("c1" in p and "interior of tr_1" in p for p in check_scene(program, on_wall))
+
+    beside = copy.deepcopy(scene)  # another tray where the cube is: that one is a collision
+    tr2 = next(o for o in beside["objects"] if o["name"] == "tr_2")
+    tr2["position"] = list(objects["c1"]["position"])
+    assert any("intersect" in p and "tr_2" in p for p in check_scene(program, beside))

@@ -1,10 +1,11 @@
 """The Panda's top-down reachable set, from its kinematics: the data `reachable by` reads.
 
-`python -m prsc.backends.reach` (`make reach`) regenerates
+`python -m prsc.commands.reach` (`make reach`) regenerates
 prsc/constraints/panda_reach.json. The constraint stage reads that file and never
-imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK.
+imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK. (A
+command, not a backend: it drives the runner's IK and, for the tray report, samples a spec.)
 
-Reachable means what the handover controller needs (backends/runner/episode.py): with
+Reachable means what the handover controller needs (backends/runner/handover.py): with
 the gripper pointing down as at home, the tool centre reaches the point, the point 12 cm
 above it (the approach) and 15 cm above it (the lift), each IK solved from the previous
 one as the controller does. Along each ray from the base (24 directions, every 15
@@ -27,6 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
+from prsc.files import atomic_write
+from prsc.geometry.rotations import quat_to_matrix
+
 APPROACH = 0.12  # m: the controller's approach height above the grasp point
 LIFT = 0.15  # m: the controller's lift
 HEIGHTS = (-0.05, 0.0, 0.05, 0.15, 0.25, 0.35)  # m above the base: the levels the cells span
@@ -37,7 +41,7 @@ MARGIN = 0.01  # m taken off the outer radii
 INNER_MARGIN = 0.03  # m added to the inner radius: near the base the IK fails in scattered spots
 CELL_LEVELS = (1, 2, 3)  # the heights (indices) the one convex cell spans: 0 to 15 cm above the base
 
-OUTPUT = Path(__file__).resolve().parent.parent / "prsc" / "constraints" / "panda_reach.json"
+OUTPUT = Path(__file__).resolve().parent.parent / "constraints" / "panda_reach.json"
 
 
 class TopDownReach:
@@ -166,7 +170,7 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
 
     scene = compile_sampler(spec).scene(0, 0)
     objects = {o["name"]: o for o in scene["objects"]}
-    rot = _quat_matrix(objects[robot]["quaternion"])
+    rot = quat_to_matrix(objects[robot]["quaternion"])
     base = np.asarray(objects[robot]["position"]) - rot[:, 2] * objects[robot]["dimensions"][2] / 2
     centre, dims = np.asarray(objects[tray]["position"]), np.asarray(objects[tray]["dimensions"])
     half_cube = np.asarray(objects[cube]["dimensions"]) / 2
@@ -194,15 +198,6 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     }
 
 
-def _quat_matrix(q: list[float]) -> np.ndarray:
-    w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-    ])
-
-
 def main() -> None:
     """Regenerate the data file, or report how much of a tray it keeps."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -213,7 +208,7 @@ def main() -> None:
         print(json.dumps(tray_report(args.tray_report, "tr_1", "c1", "r1"), indent=1))
         return
     data = compute()
-    Path(args.output).write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    atomic_write(args.output, json.dumps(data, indent=1) + "\n")
     print(f"{len(data['cell']['b'])} rows of the cell written to {args.output}")
 
 

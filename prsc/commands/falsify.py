@@ -1,0 +1,168 @@
+"""`prsc falsify`: spend an episode budget where a controller fails, still inside the spec.
+
+    prsc falsify FILE --controller TARGET --budget N --seed S [-o DIR] [--jobs J]
+                 [--executor local|ray] [--method cross-entropy|failure-rate|uniform] [--rounds R]
+
+runs the budget in rounds. Every round's scenes are drawn by the exact sequential sampler
+from a proposal that only reweights the feasible set (prsc/sampling/proposal.py: per
+object position and per range draw, a defensive mixture of the spec's law and grid cells
+of the exact region), compiled as `prsc compile --target json,mjcf` does (DIR/round_RR/),
+and simulated; then a cross-entropy step (or --method failure-rate) moves the proposal
+toward the failed scenes.
+Each episode of DIR/results.jsonl carries `round`, `weight` (the spec's sequential-law
+density over the proposal's) and `law`; the summary gives the importance-weighted
+failure probability under the spec's sequential law with a 95 % interval. Also in DIR:
+proposal.json (for `prsc sample|compile|run --proposal`), clusters.json, falsify.png.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from prsc.commands.executors import add_executor_arguments
+from prsc.constraints.model import COLLISION
+from prsc.errors import PrscError
+
+METHODS = ("cross-entropy", "failure-rate", "uniform")
+MARKER = "falsify.json"  # what this folder's campaign was: its results.jsonl is prsc falsify's own
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register `prsc falsify`."""
+    from prsc.backends.runner.controller import DEFAULT_CONTROLLER
+    from prsc.backends.runner.tasks import DEFAULT_MAX_SIM_SECONDS
+
+    parser = subparsers.add_parser("falsify", help="search a spec for the scenes where a controller fails",
+                                   description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("file", metavar="FILE", help="a .prs spec")
+    parser.add_argument("--controller", default=DEFAULT_CONTROLLER, metavar="TARGET",
+                        help=f"package.module:name or path/to/file.py:name (default {DEFAULT_CONTROLLER})")
+    parser.add_argument("--budget", type=int, default=100, help="episodes in all (default 100)")
+    parser.add_argument("--rounds", type=int, default=5, help="rounds the budget is split into (default 5)")
+    parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    parser.add_argument("--method", choices=METHODS, default="cross-entropy",
+                        help="cross-entropy (default, as VerifAI's), failure-rate (cells by their failure rate), "
+                             "or uniform (the spec's own law every round)")
+    parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default out/falsify-<name>)")
+    parser.add_argument("--max-sim-seconds", type=float, default=DEFAULT_MAX_SIM_SECONDS, metavar="S",
+                        help="end an episode past S simulated seconds as outcome `timeout`")
+    parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
+    add_executor_arguments(parser)
+    parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    parser.add_argument("--force", action="store_true", help="replace the scenes of another run in DIR")
+
+
+def round_sizes(budget: int, rounds: int) -> list[int]:
+    """The budget split into `rounds` near-equal rounds (earlier rounds take the remainder)."""
+    base, extra = divmod(budget, rounds)
+    return [base + (1 if r < extra else 0) for r in range(rounds) if base + (1 if r < extra else 0) > 0]
+
+
+def draw_round(sampler: Any, seed: int, start: int, count: int) -> tuple[list[dict], list[dict], dict]:
+    """Scenes start..start+count-1 from the proposal: (scene JSON, per-scene weight info, cell masses by site)."""
+    scenes, info, masses = [], [], {}
+    for index in range(start, start + count):
+        result = sampler.sample(seed, index)
+        scenes.append(sampler.to_json(result, seed, index))
+        state = result.context.proposal if result.context is not None else None
+        if state is None:
+            info.append({"weight": 1.0, "features": {}, "collision_rejections": 0})
+            continue
+        masses.update(state.masses)
+        info.append({"weight": state.weight(), "features": state.features(),
+                     "collision_rejections": int(result.stats.counts.get(COLLISION, 0))})
+    return scenes, info, masses
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the rounds, then write the summary, clusters, plots and the proposal."""
+    if args.budget < 1:
+        raise PrscError(f"--budget must be >= 1, got {args.budget}")
+    if args.rounds < 1:
+        raise PrscError(f"--rounds must be >= 1, got {args.rounds}")
+    if args.jobs < 1 or args.seed < 0 or not args.max_sim_seconds > 0:
+        raise PrscError("--jobs must be >= 1, --seed >= 0 and --max-sim-seconds > 0")
+    from prsc.backends.runner.gl import choose_gl_backend
+
+    gl_backend = choose_gl_backend()  # before anything imports mujoco
+    from rich.console import Console
+
+    from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
+    from prsc.backends.runner.tasks import EpisodeTask
+    from prsc.backends.runner.worker import WorkerConfig, run_task
+    from prsc.commands.compile import compile_scenes
+    from prsc.commands.executors import make_executor, worker_count
+    from prsc.commands.falsify_report import write_report
+    from prsc.files import atomic_write
+    from prsc.sampling import compile_sampler
+    from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_rate_step
+
+    source = Path(args.file)
+    if source.suffix != ".prs":
+        raise PrscError(f"{source}: prsc falsify needs a .prs spec (it draws new scenes every round)")
+    controller_ref = parse_target(args.controller)
+    controller = load_controller(controller_ref)
+    declared = declared_outcomes(controller)
+    jobs = worker_count(args.jobs)
+    executor = make_executor(args.executor, jobs, args.address, start="spawn")
+    out = args.output or Path("out") / f"falsify-{source.stem}"
+    if (out / "results.jsonl").exists() and not (out / MARKER).exists() and not args.force:
+        raise PrscError(f"{out} holds a results.jsonl that prsc falsify did not write; "
+                        "choose another output folder, or pass --force to replace it")
+    (out / "scenes").mkdir(parents=True, exist_ok=True)
+    atomic_write(out / MARKER, json.dumps({"spec": str(source), "seed": args.seed, "method": args.method,
+                                           "budget": args.budget, "rounds": args.rounds}) + "\n")
+    console = Console(stderr=True)
+    proposal = Proposal()
+    sampler = compile_sampler(str(source), args.include, law="sequential",
+                              proposal=proposal if args.method != "uniform" else None)
+    records: list[dict] = []
+    masses: dict = {}
+    start = 0
+    for number, size in enumerate(round_sizes(args.budget, args.rounds)):
+        if args.method != "uniform":
+            sampler = compile_sampler(str(source), args.include, law="sequential", proposal=proposal)
+        scenes, info, seen = draw_round(sampler, args.seed, start, size)
+        masses.update(seen)
+        check = getattr(controller, "check", None)
+        if check is not None:
+            for scene in scenes:
+                check(scene)
+        listing = out / "scenes" / f"round_{number:02d}.jsonl"
+        atomic_write(listing, "".join(json.dumps(s, separators=(",", ":")) + "\n" for s in scenes))
+        root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs, args.include,
+                              make_executor(args.executor, jobs, args.address, start="fork"), force=args.force)
+        manifest = json.loads((root / "manifest.json").read_text(encoding="utf-8"))
+        mjcf = {e["index"]: root / e["files"]["mjcf"] for e in manifest["scenes"]}
+        tasks = [EpisodeTask(start + k, scene, str(mjcf[k]), args.seed, controller_ref, args.max_sim_seconds)
+                 for k, scene in enumerate(scenes)]
+        answers = executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"), tasks)
+        for task, (status, value), extra in zip(tasks, answers, info):
+            if status == "fault":
+                from prsc.backends.runner.faults import InfrastructureError
+
+                raise InfrastructureError(value)
+            record = value.to_json()
+            record.update({"round": number, "weight": extra["weight"], "law": proposal.law,
+                           "features": extra["features"], "collision_rejections": extra["collision_rejections"]})
+            records.append(record)
+        failed = sum(r["outcome"] != "success" for r in records[start:])
+        console.print(f"round {number}: {size} episodes, {failed} failed")
+        # Each round's records at once (whole file, atomically): a kill loses at most a round.
+        atomic_write(out / "results.jsonl", "".join(json.dumps(r, separators=(", ", ": ")) + "\n" for r in records))
+        start += size
+        if args.method != "uniform":
+            episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
+            step = cross_entropy_step if args.method == "cross-entropy" else failure_rate_step
+            proposal = step(proposal, masses, episodes)
+    atomic_write(out / "proposal.json", json.dumps(proposal.to_json(), indent=1) + "\n")
+    table = write_report(records, proposal, masses, out, f"{source.name}: falsify ({args.method}), "
+                         f"budget {args.budget}, seed {args.seed}", declared)
+    Console().print(table)
+    console.print(f"results in {out / 'results.jsonl'}; proposal in {out / 'proposal.json'}")
+    sys.stdout.flush()
+    return 0

@@ -1,0 +1,148 @@
+"""`prsc compile --settle-check`: compiled scenes at rest in MuJoCo, and the causes when not."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from prsc.backends.settle_check import LIMIT, settle_folder
+from prsc.cli import main
+from prsc.commands.compile import compile_scenes
+from prsc.ir import compile_program, model as ir
+
+REPO = Path(__file__).resolve().parents[2]
+SPECS = [p for p in sorted((REPO / "specs").glob("*.prs")) if p.name != "tabletop.prs"]
+GUIDE = REPO / "docs" / "language.md"
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def completely_on(spec: Path) -> set[str]:
+    """The objects a spec places `completely on` something."""
+    program = compile_program(str(spec))
+    return {o.name for o in program.objects if any(isinstance(s, ir.On) and s.completely for s in o.specifiers)}
+
+
+# table_cube_naive.prs places its cube with a bare `on` (and requires): it may tip over a
+# wall, which test_the_settle_check_lists_a_cube_tipping_over_a_wall shows.
+CHECKED = [p for p in SPECS if p.name != "table_cube_naive.prs"]
+
+
+@pytest.mark.parametrize("spec", CHECKED, ids=lambda p: p.stem)
+def test_every_completely_on_object_of_every_spec_is_at_rest(tmp_path, spec):
+    names = completely_on(spec)
+    assert names, f"{spec.name} places nothing `completely on`: the test would check nothing"
+    root = compile_scenes(str(spec), ["json", "mjcf"], 10, 0, str(tmp_path / "out"))
+    results = settle_folder(root)
+    assert len(results) == 10
+    moved = [(r.index, d.name, round(d.distance * 1000, 1), d.cause) for r in results for d in r.drifts if d.name in names]
+    assert not moved, moved
+
+
+def test_the_cube_on_a_tray_rests_on_its_floor_inside_the_walls(tmp_path):
+    root = compile_scenes(str(REPO / "specs" / "table_cube.prs"), ["json", "mjcf"], 3, 0, str(tmp_path / "out"))
+    for index in range(3):
+        model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{index:05d}.xml"))
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        cube = model.geom("c1/box").id
+        floor = model.geom("tr_1/floor").id
+        bottom = data.geom_xpos[cube][2] - model.geom_size[cube][2]
+        assert abs(bottom - (data.geom_xpos[floor][2] + model.geom_size[floor][2])) < 1e-6
+        # Inside the walls: the cube's footprint between the inner faces (the tray is unrotated).
+        lo = data.geom_xpos[cube][:2] - model.geom_size[cube][:2]
+        hi = data.geom_xpos[cube][:2] + model.geom_size[cube][:2]
+        left, right = (model.geom(f"tr_1/wall_{side}").id for side in ("left", "right"))
+        back, front = (model.geom(f"tr_1/wall_{side}").id for side in ("back", "front"))
+        assert lo[0] >= data.geom_xpos[left][0] + model.geom_size[left][0] - 1e-9
+        assert hi[0] <= data.geom_xpos[right][0] - model.geom_size[right][0] + 1e-9
+        assert lo[1] >= data.geom_xpos[back][1] + model.geom_size[back][1] - 1e-9
+        assert hi[1] <= data.geom_xpos[front][1] - model.geom_size[front][1] + 1e-9
+        # The scene JSON says the same: bottom on the declared floor's top.
+        scene = json.loads((root / "json" / f"{index:05d}.json").read_text())
+        objects = {o["name"]: o for o in scene["objects"]}
+        tray, c1 = objects["tr_1"], objects["c1"]
+        floor_top = tray["position"][2] - tray["dimensions"][2] / 2 + tray["properties"]["floorThickness"]
+        assert abs(c1["position"][2] - c1["dimensions"][2] / 2 - floor_top) < 1e-6
+
+
+def _guide_container_example() -> str:
+    return next(b for b in re.findall(r"```prs\n(.*?)```", GUIDE.read_text(), re.S) if "floorThickness" in b)
+
+
+def test_the_guides_own_container_class_is_at_rest(tmp_path, capsys):
+    spec = tmp_path / "baskets.prs"
+    spec.write_text(_guide_container_example())
+    assert main(["compile", str(spec), "-t", "json,mjcf", "-n", "3", "-o", str(tmp_path / "out"), "--settle-check"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("(at rest)") == 3 and "3 of 3 scenes at rest" in out
+
+
+def test_an_unknown_model_for_a_declared_container_shows_in_the_settle_check(tmp_path, capsys):
+    spec = tmp_path / "baskets.prs"
+    spec.write_text(_guide_container_example().replace("    color: 'brown'\n", "    color: 'brown'\n    model: \"wickerbasket\"\n"))
+    code = main(["compile", str(spec), "-t", "json,mjcf", "-n", "2", "-o", str(tmp_path / "out"), "--settle-check"])
+    assert code == 1
+    out, err = capsys.readouterr()
+    assert "unknown model 'wickerbasket'" in err
+    assert re.search(r"cube moved [\d.]+ mm: placed on the declared floor of basket, whose model 'wickerbasket' is unknown", out)
+    assert "0 of 2 scenes at rest" in out
+
+
+def test_the_settle_check_lists_a_cube_on_a_hollow_trays_rim(tmp_path, capsys):
+    # A stored scene JSON of an older prsc: the cube at the tray's rim, no interior declared.
+    assert main(["compile", str(DATA / "table_cube_scene.json"), "-t", "json,mjcf", "-o", str(tmp_path / "out"),
+                 "--settle-check"]) == 1
+    out = capsys.readouterr().out
+    assert re.search(r"c1 moved (\d+\.\d) mm: placed on the rim of tr_1 .* hollow: it falls in", out)
+    moved = float(re.search(r"c1 moved (\d+\.\d) mm", out).group(1))
+    assert moved > 15
+
+
+def test_the_settle_check_lists_a_cube_tipping_over_a_wall(tmp_path):
+    # The naive spec places the cube with a bare `on`: its centre inside the walls, its
+    # footprint sometimes across one. Scene 1 of seed 0 is such a scene.
+    root = compile_scenes(str(REPO / "specs" / "table_cube_naive.prs"), ["json", "mjcf"], 2, 0, str(tmp_path / "out"))
+    results = settle_folder(root)
+    tipped = [d for r in results for d in r.drifts]
+    assert tipped and all(d.name == "c1" and "across a wall of tr_1" in d.cause and d.distance > LIMIT for d in tipped)
+    assert all(r.largest < LIMIT for r in results if not r.drifts)
+    assert np.isfinite([r.largest for r in results]).all()
+
+
+def test_the_settle_check_needs_json_and_mjcf(tmp_path, capsys):
+    assert main(["compile", str(REPO / "specs" / "table_cube.prs"), "-t", "mjcf", "-o", str(tmp_path / "out"),
+                 "--settle-check"]) == 2
+    assert "--target json,mjcf" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_completely_on_a_container_asset_without_a_declared_interior_rests_on_its_floor(tmp_path, capsys):
+    """The original project's model library declares no interiors: `completely on` a class
+    built as the tray asset (here by the compat `model_name`) rests on the floor the backends
+    build; a bare `on` keeps the rim, and the settle check says the object falls in."""
+    (tmp_path / "model.prs").write_text(
+        "class Tray:\n    width: 0.2364\n    length: 0.4522\n    height: 0.028964\n    model_name: \"Tray\"\n\n"
+        "class Table:\n    width: 1.8\n    length: 0.8\n    height: 0.8\n    model_name: \"Table\"\n\n"
+        "class Cube:\n    width: 0.0468\n    length: 0.0468\n    height: 0.0468\n    color: \"red\"\n"
+    )
+    head = "from model import *\n\ntable = Table at Vector3D(0, 0, 0.4)\ntr = Tray completely on table\n"
+    inside, rim = tmp_path / "inside.prs", tmp_path / "rim.prs"
+    inside.write_text(head + "c = Cube completely on tr\n")
+    rim.write_text(head + "c = Cube on tr\n")
+    out = tmp_path / "out"
+    assert main(["compile", str(inside), "-t", "json,mjcf", "-n", "3", "-o", str(out), "--settle-check"]) == 0
+    assert "3 of 3 scenes at rest" in capsys.readouterr().out
+    for index in range(3):
+        model = mujoco.MjModel.from_xml_path(str(out / "inside" / "mjcf" / f"{index:05d}.xml"))
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        cube, floor = model.geom("c/box").id, model.geom("tr/floor").id
+        bottom = data.geom_xpos[cube][2] - model.geom_size[cube][2]
+        assert abs(bottom - (data.geom_xpos[floor][2] + model.geom_size[floor][2])) < 1e-6
+    assert main(["compile", str(rim), "-t", "json,mjcf", "-n", "2", "-o", str(out), "--settle-check"]) == 1
+    assert re.search(r"c moved [\d.]+ mm: placed on the rim of tr .* hollow: it falls in", capsys.readouterr().out)

@@ -1,0 +1,87 @@
+"""`prsc falsify` as a user runs it: rounds, weights, outputs, determinism, and `--proposal` downstream."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from prsc.cli import main
+from prsc.ir import compile_program
+from tests.sampling.scene_checks import check_scenes
+
+REPO = Path(__file__).resolve().parents[2]
+SPEC = REPO / "specs" / "table_cube.prs"
+CORNER = str(REPO / "tests" / "data" / "corner_controller.py") + ":corner"
+
+
+def _records(path: Path) -> list[dict]:
+    return [{k: v for k, v in json.loads(line).items() if k != "wall_seconds"} for line in path.read_text().splitlines()]
+
+
+def test_falsify_writes_every_output_and_is_deterministic_under_jobs(tmp_path, capsys):
+    common = [str(SPEC), "--budget", "8", "--rounds", "2", "--seed", "11", "--controller", CORNER]
+    assert main(["falsify", *common, "-o", str(tmp_path / "one")]) == 0
+    assert main(["falsify", *common, "-o", str(tmp_path / "two"), "--jobs", "2"]) == 0
+    one, two = tmp_path / "one", tmp_path / "two"
+    records = _records(one / "results.jsonl")
+    assert records == _records(two / "results.jsonl")
+    assert (one / "proposal.json").read_bytes() == (two / "proposal.json").read_bytes()
+    assert [r["index"] for r in records] == list(range(8))
+    assert [r["round"] for r in records] == [0] * 4 + [1] * 4
+    assert all(r["law"] == "sequential" and r["weight"] > 0 for r in records)
+    assert [r["weight"] for r in records[:4]] == pytest.approx([1.0] * 4)  # round 0 is the spec's own law
+    assert sum(r["outcome"] == "corner" for r in records) >= 3  # seed 11's round 0 puts 3 of 4 cubes there
+    assert any(r["weight"] != pytest.approx(1.0) for r in records[4:])  # round 1 draws from the learnt proposal
+    for k in range(2):
+        folder = one / f"round_{k:02d}"
+        assert len(list((folder / "json").glob("*.json"))) == 4 and len(list((folder / "mjcf").glob("*.xml"))) == 4
+    for name in ("clusters.json", "summary.txt", "falsify.png"):
+        assert (one / name).stat().st_size > 0
+    summary = (one / "summary.txt").read_text()
+    assert "sequential law (weighted)" in summary and "distinct failure clusters" in summary
+    assert "sequential law" in capsys.readouterr().out
+
+
+def test_uniform_method_draws_the_scenes_prsc_sample_draws(tmp_path, capsys):
+    assert main(["falsify", str(SPEC), "--budget", "3", "--rounds", "1", "--seed", "2", "--method", "uniform",
+                 "--controller", CORNER, "-o", str(tmp_path / "f")]) == 0
+    assert main(["sample", str(SPEC), "-n", "3", "--seed", "2", "-o", str(tmp_path / "s.jsonl")]) == 0
+    sampled = [json.loads(line) for line in (tmp_path / "s.jsonl").read_text().splitlines()]
+    compiled = [json.loads((tmp_path / "f" / "round_00" / "json" / f"{k:05d}.json").read_text()) for k in range(3)]
+    assert [s["objects"] for s in sampled] == [c["objects"] for c in compiled]
+    assert all(r["weight"] == 1.0 for r in _records(tmp_path / "f" / "results.jsonl"))
+
+
+def test_sample_and_run_draw_from_a_learnt_proposal(tmp_path, capsys):
+    proposal = {"format": "prsc-proposal/1", "eps": 0.05, "weights": {"position:c1": [0.0] * 15 + [1.0]}}
+    path = tmp_path / "proposal.json"
+    path.write_text(json.dumps(proposal))
+    assert main(["sample", str(SPEC), "-n", "40", "--proposal", str(path), "-o", str(tmp_path / "s.jsonl")]) == 0
+    scenes = [json.loads(line) for line in (tmp_path / "s.jsonl").read_text().splitlines()]
+    assert not check_scenes(compile_program(SPEC), scenes)
+    from tests.data.corner_controller import in_corner
+
+    assert sum(map(in_corner, scenes)) >= 25  # the corner cell carries 95 % of the cube's draws
+    assert main(["run", str(SPEC), "-n", "2", "--proposal", str(path), "--controller", CORNER,
+                 "-o", str(tmp_path / "run")]) == 0
+    assert len(_records(tmp_path / "run" / "results.jsonl")) == 2
+
+
+def test_proposal_errors_are_clear(tmp_path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text("{\"format\": \"something else\"}")
+    assert main(["sample", str(SPEC), "--proposal", str(bad)]) == 2
+    assert "not a prsc proposal" in capsys.readouterr().err
+    scene = tmp_path / "scene.json"
+    scene.write_text((REPO / "tests" / "data" / "table_cube_scene.json").read_text())
+    assert main(["compile", str(scene), "--proposal", str(bad), "-o", str(tmp_path / "c")]) == 2
+    assert "does not apply to scene JSON" in capsys.readouterr().err
+    assert main(["falsify", str(SPEC), "--budget", "0", "--controller", CORNER]) == 2
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "results.jsonl").write_text("a campaign of prsc run\n")
+    assert main(["falsify", str(SPEC), "--budget", "1", "--controller", CORNER, "-o", str(other)]) == 2
+    assert "did not write" in capsys.readouterr().err
+    assert (other / "results.jsonl").read_text() == "a campaign of prsc run\n"
