@@ -9,6 +9,7 @@ Each law's scenes are drawn in a worker process of their own, side by side.
 
 from __future__ import annotations
 
+import json
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from pathlib import Path
@@ -16,8 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from prsc.cli import main
+from prsc.errors import PrscError
 from prsc.sampling import compile_sampler
 from prsc.sampling.mixing import coordinates, ks_per_coordinate
+from prsc.sampling.proposal import Proposal
 
 DATA = Path(__file__).parent / "data"
 P_MIN = 0.01  # every coordinate of the default law: KS p >= P_MIN; the sequential law: some p < P_MIN
@@ -71,3 +75,18 @@ def test_the_default_law_is_the_joint_one_and_joint_spells_rejection():
     first = [o.position for o in a.sample(3, 7).objects]
     again = [o.position for o in b.sample(3, 7).objects]
     assert all(np.array_equal(x, y) for x, y in zip(first, again))
+
+
+def test_a_proposal_reweights_the_sequential_law_and_refuses_another(tmp_path, capsys):
+    spec = DATA / "aligned_cups.prs"
+    assert compile_sampler(spec, proposal=Proposal()).law == "sequential"
+    with pytest.raises(PrscError, match="--proposal"):
+        compile_sampler(spec, law="joint", proposal=Proposal())
+    proposal = tmp_path / "proposal.json"
+    proposal.write_text(json.dumps(Proposal().to_json()))
+    out = tmp_path / "scenes.jsonl"
+    assert main(["sample", str(spec), "-n", "2", "--proposal", str(proposal), "-o", str(out)]) == 0
+    assert len(out.read_text().splitlines()) == 2
+    assert main(["sample", str(spec), "-n", "2", "--law", "joint", "--proposal", str(proposal)]) == 2
+    assert "--proposal" in capsys.readouterr().err
+    assert main(["sample", str(spec), "-n", "1", "--joint", "--law", "sequential"]) == 2
