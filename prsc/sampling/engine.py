@@ -15,10 +15,11 @@ a bounded number of times, then restarts the scene; after a bounded number of re
 the scene fails with the rejection statistics (never a hang).
 
 `sweeps > 0` gives the joint law without rejection: Metropolis-within-Gibbs sweeps over
-the sequential sample (gibbs.py). `joint=True` gives the joint law by rejection instead: objects are drawn from their regions
-ignoring collisions and rejection-checked requires, and the whole scene is rejected if
-any pair collides or any require fails. (Exact for the joint law when each object's
-region measure does not depend on earlier placements, as with `on`; see docs.)
+the sequential sample (gibbs.py). `joint=True` gives the joint law by rejection instead:
+objects are drawn from their regions ignoring collisions and rejection-checked requires,
+and the whole scene is rejected if any pair collides or any require fails. (Exact for the
+joint law when each object's region measure does not depend on earlier placements, as
+with `on`; see docs.)
 """
 
 from __future__ import annotations
@@ -92,7 +93,8 @@ class SequentialSampler:
         ]
         self._free_cache: dict[tuple[int, tuple[int, ...]], UniformSampler | None] = {}
         # The joint law without rejection: Gibbs sweeps over the sequential sample (gibbs.py).
-        self.gibbs = GibbsSweeps(self, sweeps) if sweeps > 0 and not joint else None
+        # Never with a proposal: the sweeps' ratios assume the spec's own uniform draws.
+        self.gibbs = GibbsSweeps(self, sweeps) if sweeps > 0 and not joint and proposal is None else None
 
     # ------------------------------------------------------------ scenes
     def sample(self, seed: int, index: int) -> SceneResult:

@@ -6,19 +6,21 @@ given the objects before it, conditioned on no collision and every rejection-che
 require holding, density  prod_k 1[x_k in R_k] / |R_k|  on the valid scenes.
 
 One update re-places object k. Its dependants (the objects whose rows read it, directly or
-through each other) form its group and move with it by the same translation, as a tray
-carries its cubes, or (half the time) are drawn afresh from their regions given k's new
-position. k's new position is drawn exactly uniform on its region minus the boxes
-of every object outside the group (the engine's own draw: rejection, then the exact
-free-space decomposition). The proposal is symmetric (the outside objects do not move), so
-a translation is accepted with probability min(1, prod_j |R_j(old)| / |R_j(new)|) over
-the dependants j (a fresh draw of them cancels those factors), and only if every dependant stays in its region, nothing collides and every
-require holds. Without dependants this is an exact Gibbs draw from k's conditional.
+through each other) form its group. k's new position is drawn exactly uniform on its
+region minus the boxes of every object outside the group (the engine's own draw:
+rejection, then the exact free-space decomposition); the outside objects do not move, so
+this part is symmetric and, without dependants, an exact Gibbs draw. The dependants then
+either follow (each moves by the shift of its region's bounding-box centre, as a tray
+carries its cubes: accepted with min(1, prod_j |R_j(old)| / |R_j(new)|)) or, half the
+time, are drawn afresh exactly on their free space (accepted with the ratio of the free
+fractions |F_j| / |R_j|, new over old); either only if every dependant stays in its
+region, nothing collides and every require holds.
 
 Objects keep their own random values (sizes, pre-position rotations, colours) from the
 sequential sample; only positions (and rotations that follow the position) move.
 Scenes whose movable objects cannot reach one another need no update: `interacting`
-detects them per scene, so they keep the sequential sampler's speed.
+detects them (once per spec for objects with bounds known in every scene, per scene for
+the others), so they keep the sequential sampler's speed.
 """
 
 from __future__ import annotations
@@ -39,14 +41,12 @@ from prsc.sampling.runtime import ObjectRuntime
 if TYPE_CHECKING:
     from prsc.sampling.engine import SequentialSampler
 
-# Sweeps per scene, chosen from the mixing measurement in docs/sampling.md ("The joint law"):
-# the per-coordinate KS distance to the rejection reference is within noise after 2 sweeps
-# on the specs measured there; 4 doubles that margin.
+# Sweeps per scene, chosen from the mixing measurement in docs/sampling.md ("How many
+# sweeps"): on the cups the law reaches the exact joint value within noise after 3 sweeps.
 DEFAULT_SWEEPS = 4
-# A group move either translates the dependants with k (the measure ratio decides) or, with
-# this probability, draws them afresh from their regions given k's new position: the
-# proposal then cancels the target's 1/|R_j| factors, so only validity decides. Translation
-# moves a tray with its cubes; redrawing moves cups that share a coordinate with k.
+# A group move either lets the dependants follow k (the measure ratio decides) or, with this
+# probability, draws them afresh on their free space (the ratio of free fractions decides).
+# Following moves a tray with its cubes; redrawing moves cups that share a coordinate with k.
 REDRAW = 0.5
 
 

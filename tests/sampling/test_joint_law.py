@@ -90,3 +90,14 @@ def test_a_proposal_reweights_the_sequential_law_and_refuses_another(tmp_path, c
     assert main(["sample", str(spec), "-n", "2", "--law", "joint", "--proposal", str(proposal)]) == 2
     assert "--proposal" in capsys.readouterr().err
     assert main(["sample", str(spec), "-n", "1", "--joint", "--law", "sequential"]) == 2
+
+
+def test_compile_keeps_the_law_in_the_folder_digest(tmp_path, capsys):
+    spec = str(DATA / "aligned_cups.prs")
+    out = str(tmp_path / "out")
+    assert main(["compile", spec, "--target", "json", "-n", "2", "-o", out]) == 0
+    assert main(["compile", spec, "--target", "json", "-n", "2", "-o", out]) == 0  # same law: up to date
+    # Scenes of another law are not this folder's: refused without --force, replaced with it.
+    assert main(["compile", spec, "--target", "json", "-n", "2", "-o", out, "--law", "sequential"]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert main(["compile", spec, "--target", "json", "-n", "2", "-o", out, "--law", "sequential", "--force"]) == 0
