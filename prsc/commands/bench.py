@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
         results[path] = {}
         for name in names:
             n = args.scenes if args.scenes is not None else DEFAULT_SCENES[name]
-            for law in laws if name == "exact" else ["joint"]:
+            for law in laws if name == "exact" else ["sequential"]:
                 row = f"exact/{law}" if name == "exact" else name
                 results[path][row] = measure_isolated(path, args.include, name, n, args.seconds, args.seed, args.walk_length, law)
         _distances(results[path])

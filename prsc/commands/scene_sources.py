@@ -102,8 +102,8 @@ def add_law_argument(parser: Any) -> None:
     """The --law option of the commands that sample a spec (docs/sampling.md)."""
     parser.add_argument("--law", choices=("joint", "sequential", "rejection"), default=None,
                         help="joint (default: the paper's law, by Gibbs sweeps), sequential (objects one at a time, "
-                             "faster; the default with --proposal), or rejection (the joint law by whole-scene "
-                             "rejection: the exact reference)")
+                             "faster; the default with --proposal or --sampler hit-and-run), or rejection (the joint "
+                             "law by whole-scene rejection: the exact reference)")
 
 
 def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), law: str | None = None,

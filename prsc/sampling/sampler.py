@@ -56,8 +56,9 @@ class Sampler:
         if joint and law not in (None, "rejection"):
             raise PrscError(f"--joint is --law rejection: it does not combine with --law {law}")
         law = "rejection" if joint else law  # `joint=True` is the older spelling
-        if law is None:  # a falsification proposal reweights the sequential law (proposal.py)
-            law = "sequential" if proposal is not None else "joint"
+        if law is None:  # Gibbs sweeps need exact draws: hit-and-run (the paper's sampler) stays
+            # sequential, and a falsification proposal reweights the sequential law (proposal.py)
+            law = "joint" if proposal is None and sampler == "exact" else "sequential"
         if law not in LAWS:
             raise PrscError(f"unknown law {law!r} (choose from {', '.join(LAWS)})")
         if sweeps < 1:
