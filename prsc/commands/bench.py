@@ -2,12 +2,15 @@
 `prsc bench --backends FILE [-n 1000] [--jobs 1,2]`: files written per second per format.
 `prsc bench --episodes FILE [-n 21] [--controller TARGET]`: CPU seconds per `prsc run` episode.
 
-For each spec and sampler (exact, hit-and-run, rejection): scenes per second on one core
+For each spec and sampler (exact under each law: joint, sequential, rejection; hit-and-run;
+the rejection baseline): scenes per second on one core
 (scene JSON dicts, measured in process CPU time so other load on the machine does not
 count; wall-clock rate shown too), rejections per scene by cause (the paper's Table II
 causes: collision, relative position, containment, require; plus dead ends), and the peak
-resident memory of the process that sampled. Each measurement runs in a fresh forked
-process so peaks do not carry over.
+resident memory of the process that sampled, and the distance of its object positions to
+the joint law's exact reference (`exact/rejection`, when it sampled at least 200 scenes): the
+largest per-coordinate two-sample KS statistic and the smallest p-value. Each measurement
+runs in a fresh forked process so peaks do not carry over.
 """
 
 from __future__ import annotations
@@ -24,7 +27,10 @@ from typing import Any
 from prsc.errors import PrscError
 
 SAMPLERS = ("exact", "hit-and-run", "rejection")
+LAWS = ("joint", "sequential", "rejection")
 DEFAULT_SCENES = {"exact": 5000, "hit-and-run": 200, "rejection": 100}
+REFERENCE = "exact/rejection"  # the joint law by whole-scene rejection
+MIN_REFERENCE = 200  # scenes the reference needs before a distance means anything
 
 
 def add_parser(subparsers: Any) -> None:
@@ -37,6 +43,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
     parser.add_argument("--json", action="store_true", help="print the results as JSON")
     parser.add_argument("--samplers", default=",".join(SAMPLERS), help="comma-separated subset of exact,hit-and-run,rejection")
+    parser.add_argument("--laws", default=",".join(LAWS), help="comma-separated laws of the exact sampler (default all)")
     parser.add_argument("-n", "--scenes", type=int, default=None,
                         help="scenes per sampler (default: exact 5000, hit-and-run 200, rejection 100)")
     parser.add_argument("--seconds", type=float, default=20.0, help="stop a measurement after this much CPU time (default 20)")
@@ -52,21 +59,26 @@ def add_parser(subparsers: Any) -> None:
                         help="with --episodes: the controller (default the handover)")
 
 
-def measure(path: str, include: list[str], sampler_name: str, n: int, seconds: float, seed: int, walk_length: int) -> dict[str, Any]:
-    """Sample up to n scenes (or `seconds` of CPU time) and report rates, rejections and memory."""
+def measure(
+    path: str, include: list[str], sampler_name: str, n: int, seconds: float, seed: int, walk_length: int, law: str = "joint",
+) -> dict[str, Any]:
+    """Sample up to n scenes (or `seconds` of CPU time): rates, rejections, memory, positions."""
     from prsc.sampling import compile_sampler
+    from prsc.sampling.mixing import coordinates
     from prsc.sampling.stats import RejectionStats
 
-    sampler = compile_sampler(path, include, sampler_name, walk_length=walk_length)
+    sampler = compile_sampler(path, include, sampler_name, walk_length=walk_length, law=law)
     # One scene first: imports and lazily prepared regions are set-up, not per-scene cost.
     sampler.scene(seed, 10**9)
     stats = RejectionStats()
     cpu0, wall0 = time.process_time(), time.perf_counter()
     done = 0
+    positions = []
     for index in range(n):
         result = sampler.sample(seed, index)
         sampler.to_json(result, seed, index)
         stats.merge(result.stats)
+        positions.append(coordinates(result).tolist())
         done += 1
         if time.process_time() - cpu0 > seconds:
             break
@@ -80,6 +92,7 @@ def measure(path: str, include: list[str], sampler_name: str, n: int, seconds: f
         "rejections_per_scene": sum(by_cause.values()) / done,
         "rejections_by_cause": {cause: count / done for cause, count in by_cause.items()},
         "peak_memory_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "positions": positions,
     }
 
 
@@ -125,7 +138,7 @@ def _table(results: dict[str, dict[str, dict[str, Any]]]) -> None:
 
     table = Table(title="prsc bench: samplers side by side (one core)")
     for col in ("spec", "sampler", "scenes", "scenes/s", "wall/s", "rejections/scene",
-                "collision", "relative", "containment", "require", "dead end", "peak MB"):
+                "collision", "relative", "containment", "require", "dead end", "peak MB", "KS D", "KS p"):
         table.add_column(col, justify="left" if col in ("spec", "sampler") else "right")
     for spec, per in results.items():
         for name, r in per.items():
@@ -135,6 +148,8 @@ def _table(results: dict[str, dict[str, dict[str, Any]]]) -> None:
                 f"{r['rejections_per_scene']:.2f}", f"{c.get('collision', 0):.2f}", f"{c.get('relative position', 0):.2f}",
                 f"{c.get('containment', 0):.2f}", f"{c.get('require', 0):.2f}", f"{c.get('dead end', 0):.2f}",
                 f"{r['peak_memory_mb']:.0f}",
+                "-" if r.get("ks_statistic") is None else f"{r['ks_statistic']:.3f}",
+                "-" if r.get("ks_pvalue") is None else f"{r['ks_pvalue']:.2g}",
             )
     console = Console()
     if not console.is_terminal:
@@ -166,18 +181,40 @@ def run(args: argparse.Namespace) -> int:
         for path in args.files:
             print_episodes(path, args.scenes or 21, args.controller, args.include)
         return 0
+    laws = [s.strip() for s in args.laws.split(",") if s.strip()]
+    if not laws or any(law not in LAWS for law in laws):
+        raise PrscError(f"--laws takes a comma-separated subset of {', '.join(LAWS)}, got {args.laws!r}")
     results: dict[str, dict[str, dict[str, Any]]] = {}
     for path in args.files:
         results[path] = {}
         for name in names:
             n = args.scenes if args.scenes is not None else DEFAULT_SCENES[name]
-            results[path][name] = measure_isolated(path, args.include, name, n, args.seconds, args.seed, args.walk_length)
+            for law in laws if name == "exact" else ["sequential"]:
+                row = f"exact/{law}" if name == "exact" else name
+                results[path][row] = measure_isolated(path, args.include, name, n, args.seconds, args.seed, args.walk_length, law)
+        _distances(results[path])
     if args.json:
         json.dump({"specs": results}, sys.stdout, indent=1)
         sys.stdout.write("\n")
     else:
         _table(results)
     return 0
+
+
+def _distances(rows: dict[str, dict[str, Any]]) -> None:
+    """Add each row's KS distance to the rejection reference (None without one); drop positions."""
+    import numpy as np
+
+    from prsc.sampling.mixing import distance
+
+    reference = rows.get(REFERENCE)
+    ref = np.array(reference["positions"]) if reference is not None and reference["scenes"] >= MIN_REFERENCE else None
+    for name, r in rows.items():
+        mine = np.array(r.pop("positions"))
+        r["ks_statistic"] = r["ks_pvalue"] = None
+        if ref is not None and name != REFERENCE and len(mine) and mine.shape[1] == ref.shape[1]:
+            d = distance(mine, ref, [str(c) for c in range(ref.shape[1])])
+            r["ks_statistic"], r["ks_pvalue"] = d.statistic, d.pvalue
 
 
 def _run_backends(args: argparse.Namespace) -> int:

@@ -36,8 +36,8 @@ from prsc.commands.output_folder import (
     CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
     lock_folder, output_root, prepare_root, record_file, remove_listed, write_manifest,
 )
-from prsc.commands.scene_sources import add_proposal_argument, proposal_from_json, proposal_key, read_input
-from prsc.commands.scene_sources import read_proposal, read_scene_file, spec_sampler
+from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, proposal_key
+from prsc.commands.scene_sources import read_input, read_proposal, read_scene_file, spec_sampler
 from prsc.commands.progress import progress_bar
 from prsc.commands.settle import SETTLE_HELP, settle_check, settle_targets
 from prsc.errors import PrscError
@@ -63,6 +63,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--settle-check", action="store_true", help=SETTLE_HELP)
     add_proposal_argument(parser)
     add_executor_arguments(parser)
+    add_law_argument(parser)
 
 
 # ------------------------------------------------------------------ jobs
@@ -84,6 +85,7 @@ class Job:
     # folder's manifest is this run's (a kill between rename and record), else refused.
     adopt_unlisted: bool = True
     meshes_anywhere: bool = False  # --meshes-anywhere
+    law: str | None = None  # --law: the law a worker compiling the spec again samples
     proposal: dict | None = None  # --proposal: a falsification proposal's JSON (prsc/sampling/proposal.py)
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
@@ -92,7 +94,7 @@ class Job:
         if self.scenes is not None:
             return self.scenes[index]
         if self._sampler is None:
-            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs, self.proposal)
+            self._sampler = spec_sampler(self.spec, self.seed, self.include_dirs, self.law, self.proposal)
         return self._sampler(index)
 
     def __getstate__(self) -> dict:
@@ -209,7 +211,7 @@ def _run_parallel(job: Job, indices: Iterable[int], executor: Executor,
 
 def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
                    include_dirs: Sequence[str] = (), executor: Executor | None = None, force: bool = False,
-                   meshes_anywhere: bool = False, proposal: dict | None = None) -> Path:
+                   meshes_anywhere: bool = False, proposal: dict | None = None, law: str | None = None) -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
     For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
@@ -246,11 +248,13 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
         from prsc.sampling import compile_sampler
 
-        compiled = compile_sampler(str(file), include_dirs=include_dirs, proposal=proposal_from_json(proposal))
+        compiled = compile_sampler(str(file), include_dirs=include_dirs, law=law, proposal=proposal_from_json(proposal))
+        law = compiled.law
         program = compiled.program
         sampler = functools.partial(compiled.scene, seed)
         data = read_input(path)
         sources = hashlib.sha256(data)
+        sources.update(f"law={law}".encode())  # another law gives other scenes
         for imported in compiled.program.source_files[1:]:
             # The scenes also depend on every imported file (those found through --include
             # too): a change there makes them stale.
@@ -265,7 +269,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     lock = lock_folder(root)
     try:
         return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, hashlib.sha256(data).hexdigest(),
-                               sources.hexdigest(), scenes, sampler, width, created, meshes_anywhere, executor, proposal)
+                               sources.hexdigest(), scenes, sampler, width, created, meshes_anywhere, executor, proposal, law)
     except PrscError as error:
         raise _at_object(error, program) from None
     finally:
@@ -283,7 +287,8 @@ def _at_object(error: PrscError, program: Any) -> PrscError:
 def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int, jobs: int,
                     include_dirs: Sequence[str], force: bool, digest: str, sources_digest: str, scenes: list[dict] | None,
                     sampler: Callable[[int], dict] | None, width: int, created: Path | None,
-                    meshes_anywhere: bool, executor: Executor | None, proposal: dict | None = None) -> Path:
+                    meshes_anywhere: bool, executor: Executor | None, proposal: dict | None = None,
+                    law: str | None = None) -> Path:
     """The part of compile_scenes that runs while this process holds the folder's lock."""
     from prsc.files import remove_stale_temporaries
 
@@ -301,7 +306,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         manifest, entries = None, {}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
               include_dirs=tuple(include_dirs), sources=sources_digest, adopt_unlisted=manifest is not None,
-              meshes_anywhere=meshes_anywhere, proposal=proposal, _sampler=sampler)
+              meshes_anywhere=meshes_anywhere, law=law, proposal=proposal, _sampler=sampler)
     listed = Listed({k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
@@ -387,5 +392,5 @@ def run(args: argparse.Namespace) -> int:
     executor = make_executor(args.executor, jobs, args.address, start="fork")
     settle_targets(targets, args.settle_check)
     root = compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
-                          args.force, args.meshes_anywhere, read_proposal(args.proposal, args.file))
+                          args.force, args.meshes_anywhere, read_proposal(args.proposal, args.file), args.law)
     return settle_check(root, args.scenes, Path(args.file).suffix in (".json", ".jsonl")) if args.settle_check else 0

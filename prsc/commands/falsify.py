@@ -118,13 +118,14 @@ def run(args: argparse.Namespace) -> int:
                                            "budget": args.budget, "rounds": args.rounds}) + "\n")
     console = Console(stderr=True)
     proposal = Proposal()
-    sampler = compile_sampler(str(source), args.include, proposal=proposal if args.method != "uniform" else None)
+    sampler = compile_sampler(str(source), args.include, law="sequential",
+                              proposal=proposal if args.method != "uniform" else None)
     records: list[dict] = []
     masses: dict = {}
     start = 0
     for number, size in enumerate(round_sizes(args.budget, args.rounds)):
         if args.method != "uniform":
-            sampler = compile_sampler(str(source), args.include, proposal=proposal)
+            sampler = compile_sampler(str(source), args.include, law="sequential", proposal=proposal)
         scenes, info, seen = draw_round(sampler, args.seed, start, size)
         masses.update(seen)
         check = getattr(controller, "check", None)

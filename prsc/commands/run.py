@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from prsc.commands.executors import add_executor_arguments, cpu_seconds
-from prsc.commands.scene_sources import add_proposal_argument, read_proposal
+from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, read_proposal
 from prsc.errors import PrscError
 
 RESULTS = "results.jsonl"
@@ -51,6 +51,7 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--jobs", "-j", type=int, default=1, help="worker processes (default 1)")
     add_executor_arguments(parser)
     add_proposal_argument(parser)
+    add_law_argument(parser)
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
@@ -192,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
     count = args.n if args.n is not None else (0 if is_json else 10)
     root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs, args.include,
                           make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
-                          proposal=proposal)
+                          proposal=proposal, law=args.law)
     from prsc.commands.compile import MANIFEST
 
     manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))

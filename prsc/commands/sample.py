@@ -12,7 +12,7 @@ import sys
 from typing import IO, Any
 
 from prsc.commands.outputs import output_file, write_error
-from prsc.commands.scene_sources import add_proposal_argument, proposal_from_json, read_proposal
+from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, read_proposal
 from prsc.errors import PrscError
 
 
@@ -30,8 +30,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--sampler", choices=("exact", "hit-and-run", "rejection"), default="exact",
                         help="exact (default), hit-and-run (the paper's), or rejection (the naive baseline)")
     parser.add_argument("--walk-length", type=int, default=100, help="hit-and-run steps per sample (default 100)")
-    parser.add_argument("--joint", action="store_true",
-                        help="joint uniform law over non-colliding scenes (whole-scene rejection) instead of sequential placement")
+    parser.add_argument("--joint", action="store_true", help="the same as --law rejection")
+    add_law_argument(parser)
     add_proposal_argument(parser)
     parser.add_argument("-o", "--output", metavar="PATH", help="write to PATH instead of stdout")
     parser.add_argument("--stats", action="store_true", help="print rejection counts by cause to stderr at the end")
@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     target = None if args.output is None else output_file(args.output)
     proposal = proposal_from_json(read_proposal(args.proposal, args.file))
     sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length, joint=args.joint,
-                              proposal=proposal)
+                              law=args.law, proposal=proposal)
     if target is None:
         stats = write_scenes(sampler, args.seed, args.start, args.scenes, sys.stdout)
         sys.stdout.flush()

@@ -98,11 +98,20 @@ def _nesting_place(text: str, limit: int) -> tuple[int, int]:
     return 1, 1
 
 
-def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), proposal: dict | None = None) -> Callable[[int], dict]:
+def add_law_argument(parser: Any) -> None:
+    """The --law option of the commands that sample a spec (docs/sampling.md)."""
+    parser.add_argument("--law", choices=("joint", "sequential", "rejection"), default=None,
+                        help="joint (default: the paper's law, by Gibbs sweeps), sequential (objects one at a time, "
+                             "faster; the default with --proposal or --sampler hit-and-run), or rejection (the joint "
+                             "law by whole-scene rejection: the exact reference)")
+
+
+def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), law: str | None = None,
+                 proposal: dict | None = None) -> Callable[[int], dict]:
     """Scene k of a .prs spec as scene JSON (the sampler is imported only when needed)."""
     from prsc.sampling import compile_sampler
 
-    sampler = compile_sampler(spec, include_dirs=include_dirs, proposal=proposal_from_json(proposal))
+    sampler = compile_sampler(spec, include_dirs=include_dirs, law=law, proposal=proposal_from_json(proposal))
     return lambda index: sampler.scene(seed=seed, index=index)
 
 

@@ -14,10 +14,12 @@ few times, then backtracks to the latest earlier object it depends on or collide
 a bounded number of times, then restarts the scene; after a bounded number of restarts
 the scene fails with the rejection statistics (never a hang).
 
-`joint=True` gives the joint uniform law instead: objects are drawn from their regions
-ignoring collisions and rejection-checked requires, and the whole scene is rejected if
-any pair collides or any require fails. (Exact for the joint law when each object's
-region measure does not depend on earlier placements, as with `on`; see docs.)
+`sweeps > 0` gives the joint law without rejection: Metropolis-within-Gibbs sweeps over
+the sequential sample (gibbs.py). `joint=True` gives the joint law by rejection instead:
+objects are drawn from their regions ignoring collisions and rejection-checked requires,
+and the whole scene is rejected if any pair collides or any require fails. (Exact for the
+joint law when each object's region measure does not depend on earlier placements, as
+with `on`; see docs.)
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.sampler import UniformSampler
 from prsc.sampling.attempt import Attempt, Failure, Limits
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
+from prsc.sampling.gibbs import GibbsSweeps
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.regions import Prepared
 from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params
@@ -66,6 +69,7 @@ class SequentialSampler:
         joint: bool = False,
         limits: Limits | None = None,
         proposal: Proposal | None = None,
+        sweeps: int = 0,
     ) -> None:
         if method not in ("exact", "hit-and-run"):
             raise ValueError(f"unknown method {method!r}")
@@ -88,6 +92,9 @@ class SequentialSampler:
             rt.plan.static_position is None or rt.half is None or rt.rotation is None for rt in self.runtimes
         ]
         self._free_cache: dict[tuple[int, tuple[int, ...]], UniformSampler | None] = {}
+        # The joint law without rejection: Gibbs sweeps over the sequential sample (gibbs.py).
+        # Never with a proposal: the sweeps' ratios assume the spec's own uniform draws.
+        self.gibbs = GibbsSweeps(self, sweeps) if sweeps > 0 and not joint and proposal is None else None
 
     # ------------------------------------------------------------ scenes
     def sample(self, seed: int, index: int) -> SceneResult:
@@ -118,6 +125,8 @@ class SequentialSampler:
                 continue
             if self.joint and not self._joint_ok(run):
                 continue
+            if self.gibbs is not None:
+                self.gibbs.run(run)
             ctx.level = len(self.runtimes)
             params = evaluate_params(self.cprog, ctx)
             objects = [ctx.objects[rt.plan.name] for rt in self.runtimes]

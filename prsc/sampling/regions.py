@@ -202,6 +202,23 @@ class RegionProvider:
         polys = [rule_rows(r, ctx, support) for r in self.plan.rules if r.soft is None or r.soft in ctx.active_requires]
         return self._general(intersect(*polys) if polys else Polytope.everything()), None
 
+    def fixed_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Bounds of the region in every scene (relative to the anchor's position when anchored),
+        for an object with a static support; None when only a scene can tell."""
+        try:
+            if not self.dynamic:
+                if self._static is None:
+                    self._static = prepare(self.static_rows if self.static_rows is not None else Polytope.everything())
+                return self._static.lo, self._static.hi
+            if self.mode == "anchored":
+                if self._anchored_state == "new":
+                    self._prepare_anchored()
+                if self._anchored is not None:  # the static rows only cut the translated region
+                    return self._anchored.lo, self._anchored.hi
+        except (EmptyRegionError, UnboundedRegionError):
+            pass
+        return None
+
     def _anchored_region(self, shift: np.ndarray) -> Prepared | None:
         """The anchored rows' region if the static rows do not cut it once translated, else None."""
         if self._anchored_state == "new":

@@ -17,12 +17,16 @@ from prsc.constraints.lower import lower_program
 from prsc.constraints.model import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir.program import Program
+from prsc.sampling.gibbs import DEFAULT_SWEEPS
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
 from prsc.sampling.scene_json import object_template, scene_json
 
 SAMPLERS = ("exact", "hit-and-run", "rejection")
+# The law of a scene (docs/sampling.md): the joint one by Gibbs sweeps (default), objects one
+# at a time (sequential), or the joint one by whole-scene rejection (the exact reference).
+LAWS = ("joint", "sequential", "rejection")
 
 
 class Sampler:
@@ -35,18 +39,31 @@ class Sampler:
         *,
         walk_length: int = 100,
         joint: bool = False,
+        law: str | None = None,
+        sweeps: int = DEFAULT_SWEEPS,
         limits: Limits | None = None,
         max_attempts: int = DEFAULT_ATTEMPTS,
         spec: str | None = None,
         constraints: ConstraintProgram | None = None,
         proposal: Proposal | None = None,
     ) -> None:
-        if proposal is not None and (sampler != "exact" or joint):
-            raise PrscError("--proposal draws with the exact sequential sampler (not with --sampler or --joint)")
+        if proposal is not None and (sampler != "exact" or joint or law not in (None, "sequential")):
+            raise PrscError("--proposal draws with the exact sequential sampler (not with --sampler, --joint or another --law)")
         if sampler not in SAMPLERS:
             raise PrscError(f"unknown sampler {sampler!r} (choose from {', '.join(SAMPLERS)})")
         if walk_length < 1:
             raise PrscError(f"the hit-and-run walk length must be >= 1, got {walk_length}")
+        if joint and law not in (None, "rejection"):
+            raise PrscError(f"--joint is --law rejection: it does not combine with --law {law}")
+        law = "rejection" if joint else law  # `joint=True` is the older spelling
+        if law is None:  # Gibbs sweeps need exact draws: hit-and-run (the paper's sampler) stays
+            # sequential, and a falsification proposal reweights the sequential law (proposal.py)
+            law = "joint" if proposal is None and sampler == "exact" else "sequential"
+        if law not in LAWS:
+            raise PrscError(f"unknown law {law!r} (choose from {', '.join(LAWS)})")
+        if sweeps < 1:
+            raise PrscError(f"the number of Gibbs sweeps must be >= 1, got {sweeps}")
+        self.law = law
         self.program = program
         self.method = sampler
         self.spec = spec if spec is not None else program.path
@@ -61,7 +78,9 @@ class Sampler:
         if sampler == "rejection":
             self._engine = RejectionSampler(self.constraints, max_attempts)
         else:
-            self._engine = SequentialSampler(self.constraints, sampler, walk_length, joint, limits, proposal)
+            self._engine = SequentialSampler(
+                self.constraints, sampler, walk_length, law == "rejection", limits, proposal, sweeps if law == "joint" else 0
+            )
 
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
@@ -84,7 +103,7 @@ class Sampler:
 def compile_sampler(
     path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = (), sampler: str = "exact", **opts: Any
 ) -> Sampler:
-    """Compile a .prs file into a Sampler (opts: walk_length, joint, limits, max_attempts, proposal)."""
+    """Compile a .prs file into a Sampler (opts: walk_length, law, sweeps, joint, limits, max_attempts, proposal)."""
     from prsc.ir import compile_program
 
     program = compile_program(path, include_dirs)

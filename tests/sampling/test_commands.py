@@ -66,12 +66,24 @@ def test_bench_json_reports_every_sampler(capsys):
     report = json.loads(capsys.readouterr().out)["specs"]
     assert set(report) == {TABLE_CUBE, NAIVE}
     for spec, per in report.items():
-        assert set(per) == {"exact", "hit-and-run", "rejection"}
+        assert set(per) == {"exact/joint", "exact/sequential", "exact/rejection", "hit-and-run", "rejection"}
         for name, r in per.items():
             assert r["scenes"] == 5 and r["scenes_per_s"] > 0 and r["peak_memory_mb"] > 0
             assert set(r["rejections_by_cause"]) >= {"collision", "relative position", "containment", "require"}
-        assert per["exact"]["rejections_per_scene"] == 0
+            assert r["ks_statistic"] is None  # 5 reference scenes: too few for a distance
+        # Table-Cube's objects do not interact: the joint law needs no sweeps, nothing is rejected.
+        assert per["exact/joint"]["rejections_per_scene"] == per["exact/sequential"]["rejections_per_scene"] == 0
         assert per["rejection"]["rejections_per_scene"] > 10
+
+
+def test_bench_reports_the_distance_to_the_rejection_reference(capsys):
+    spec = str(Path(__file__).parent / "data" / "tray_four_cubes.prs")
+    args = ["bench", spec, "--json", "-n", "400", "--samplers", "exact", "--laws", "sequential,rejection"]
+    assert main(args) == 0
+    per = json.loads(capsys.readouterr().out)["specs"][spec]
+    assert set(per) == {"exact/sequential", "exact/rejection"}
+    assert per["exact/rejection"]["ks_statistic"] is None
+    assert 0 < per["exact/sequential"]["ks_statistic"] <= 1 and 0 <= per["exact/sequential"]["ks_pvalue"] <= 1
 
 
 def test_bench_table(capsys):

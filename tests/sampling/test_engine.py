@@ -63,8 +63,9 @@ def test_joint_law_differs_from_sequential_and_matches_a_reference(tmp_path):
         "a = Cube with width 0.2, completely on t\n"
         "b = Cube with width 0.2, completely on t\n"
     )
-    seq, _ = _sampler(tmp_path, text)
+    seq, _ = _sampler(tmp_path, text, law="sequential")
     joint, program = _sampler(tmp_path, text, joint=True)
+    gibbs, _ = _sampler(tmp_path, text)  # the default law: the joint one, by Gibbs sweeps
     n, k = 3000, 8
     edges = np.linspace(-0.2, 0.2, k + 1)
 
@@ -81,6 +82,7 @@ def test_joint_law_differs_from_sequential_and_matches_a_reference(tmp_path):
     observed = hist(joint)
     assert chisquare(observed, ref / ref.sum() * n).pvalue > 1e-3
     assert chisquare(observed).pvalue < 1e-6  # and clearly not uniform
+    assert chisquare(hist(gibbs), ref / ref.sum() * n).pvalue > 1e-3
     assert check_scene(program, joint.scene(3, 1)) == []
 
 
