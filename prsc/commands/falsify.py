@@ -27,7 +27,7 @@ from prsc.commands.executors import add_executor_arguments
 from prsc.constraints.model import COLLISION
 from prsc.errors import PrscError
 
-METHODS = ("cross-entropy", "failure-rate", "uniform")
+METHODS = ("failure-tree", "cross-entropy", "uniform")
 MARKER = "falsify.json"  # what this folder's campaign was: its results.jsonl is prsc falsify's own
 
 
@@ -44,9 +44,9 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--budget", type=int, default=100, help="episodes in all (default 100)")
     parser.add_argument("--rounds", type=int, default=5, help="rounds the budget is split into (default 5)")
     parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
-    parser.add_argument("--method", choices=METHODS, default="cross-entropy",
-                        help="cross-entropy (default, as VerifAI's), failure-rate (cells by their failure rate), "
-                             "or uniform (the spec's own law every round)")
+    parser.add_argument("--method", choices=METHODS, default="failure-tree",
+                        help="failure-tree (default: a mixture over the leaves of a failure-rate tree and the "
+                             "failures found), cross-entropy (VerifAI's, per input), or uniform (the spec's own law)")
     parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default out/falsify-<name>)")
     parser.add_argument("--max-sim-seconds", type=float, default=DEFAULT_MAX_SIM_SECONDS, metavar="S",
                         help="end an episode past S simulated seconds as outcome `timeout`")
@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.commands.falsify_report import write_report
     from prsc.files import atomic_write
     from prsc.sampling import compile_sampler
-    from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_rate_step
+    from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_tree_step
 
     source = Path(args.file)
     if source.suffix != ".prs":
@@ -156,7 +156,7 @@ def run(args: argparse.Namespace) -> int:
         start += size
         if args.method != "uniform":
             episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
-            step = cross_entropy_step if args.method == "cross-entropy" else failure_rate_step
+            step = cross_entropy_step if args.method == "cross-entropy" else failure_tree_step
             proposal = step(proposal, masses, episodes)
     atomic_write(out / "proposal.json", json.dumps(proposal.to_json(), indent=1) + "\n")
     table = write_report(records, proposal, masses, out, f"{source.name}: falsify ({args.method}), "

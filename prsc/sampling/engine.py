@@ -244,10 +244,9 @@ class SequentialSampler:
                 return self._blocked(rt, candidates, run)
             # The pieces are exactly the collision-free positions (the obstacles' interiors
             # are where the OBB test says "collides"): only requires can reject a draw.
-            if ctx.proposal is not None:
-                ctx.proposal.spec_position(rt.plan.name, rt.plan.index)
             for _ in range(self.limits.free_draws):
-                if self._accept(rt, obj, half, free.sample_one(rng), [], checks, run):
+                if self._accept(rt, obj, half, self._free_draw(rt, free, region, candidates, obj.rotation, half, run),
+                                [], checks, run):
                     return True
             return False
         for _ in range(self.limits.point_draws):
@@ -287,6 +286,14 @@ class SequentialSampler:
         if run.ctx.proposal is None:
             return region.draw(run.ctx.rng, self.method, self.walk_length)
         return run.ctx.proposal.position(rt.plan.name, rt.plan.index, region, run.ctx)
+
+    def _free_draw(self, rt: ObjectRuntime, free: UniformSampler, region: Prepared, candidates: list[PlacedBox],
+                   rotation: np.ndarray, half: np.ndarray, run: Attempt) -> np.ndarray:
+        """A position on the static free space: the spec's law, or the falsification proposal's (ratio recorded)."""
+        if run.ctx.proposal is None:
+            return free.sample_one(run.ctx.rng)
+        obstacles = obstacles_for(candidates, rotation, half)
+        return run.ctx.proposal.free_position(rt.plan.name, rt.plan.index, free, region, obstacles, run.ctx)
 
     def _all_static(self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox]) -> bool:
         """Whether the region and every candidate obstacle are the same objects in every scene."""

@@ -21,19 +21,22 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import GeometryError
+from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.sampler import UniformSampler, prepare_sampler
 
 FORMAT = "prsc-proposal/1"
-DEFAULT_EPS = 0.2  # defensive share of the spec's own law: every ratio <= 1 / eps per site
+DEFAULT_EPS = 0.1  # defensive share of the spec's own law: every scene's weight <= 1 / eps
+SITE_EPS = 0.2  # cross-entropy: each site's share of the spec's law (every site's ratio <= 1 / SITE_EPS)
 RANGE_BINS = 8
-GRID = {1: 8, 2: 4, 3: 3}  # cells per active axis of a position's region
+RANGE_MASS = np.full(RANGE_BINS, 1.0 / RANGE_BINS)
+GRID = {1: 8, 2: 8, 3: 4}  # cells per active axis of a position's region
 EXTENT = 1e-9  # metres: an axis of the region's box narrower than this is not gridded
 
 
@@ -65,8 +68,9 @@ def _flat(u: np.ndarray, k: int) -> int:
     return index
 
 
-def cut_into_cells(poly: Polytope, lo: np.ndarray, hi: np.ndarray, measure: float, dim: int) -> Cells | None:
-    """The region's grid cells, or None when it is a point (nothing to reweight)."""
+def cut_into_cells(piece_of: Callable[[Polytope], UniformSampler], lo: np.ndarray, hi: np.ndarray,
+                   measure: float, dim: int) -> Cells | None:
+    """The grid cells of a region (piece_of(box): the region cut by the box), or None when it is a point."""
     axes = np.nonzero(hi - lo > EXTENT)[0]
     if dim == 0 or not len(axes):
         return None
@@ -83,7 +87,7 @@ def cut_into_cells(poly: Polytope, lo: np.ndarray, hi: np.ndarray, measure: floa
             a_rows += [row, -row]
             b_rows += [lo[axis] + (digit + 1) * step, -(lo[axis] + digit * step)]
         try:
-            piece = prepare_sampler(intersect(poly, Polytope.from_rows(a_rows, b_rows)))
+            piece = piece_of(Polytope.from_rows(a_rows, b_rows))
         except GeometryError:
             piece = None
         if piece is not None and (piece.dim < dim or piece.measure <= 0.0):
@@ -94,18 +98,42 @@ def cut_into_cells(poly: Polytope, lo: np.ndarray, hi: np.ndarray, measure: floa
     return Cells(lo, hi, axes, k, samplers, shares / shares.sum())
 
 
-@dataclass
-class Proposal:
-    """Per site, the cell weights w (a site absent keeps the spec's law); eps the defensive share."""
+@dataclass(frozen=True)
+class Component:
+    """One product law over the sites: per site, `spec_share` of the spec's law, the rest on weighted cells."""
 
-    weights: dict[str, list[float]] = field(default_factory=dict)
+    share: float  # the component's share of the mixture
+    spec_share: float
+    cells: dict[str, dict[int, float]]  # site -> {cell: weight}; a site absent keeps the spec's law
+
+    def site_ratio(self, site: str, cell: int, mass: np.ndarray) -> float:
+        """This component's density over the spec's at a draw in `cell` of the site (masses `mass`)."""
+        weights = self.cells.get(site)
+        if weights is None or not mass[cell] > 0:
+            return 1.0
+        total = sum(w for c, w in weights.items() if c < len(mass) and mass[c] > 0)
+        if not total > 0:
+            return 1.0
+        return self.spec_share + (1 - self.spec_share) * weights.get(cell, 0.0) / total / mass[cell]
+
+    def to_json(self) -> dict[str, Any]:
+        """As DIR/proposal.json stores it."""
+        return {"share": self.share, "spec_share": self.spec_share,
+                "cells": {site: {str(c): w for c, w in sorted(cells.items())} for site, cells in self.cells.items()}}
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """eps of the spec's law plus a mixture of product components (none: the spec's law, draw for draw)."""
+
+    components: tuple[Component, ...] = ()
     eps: float = DEFAULT_EPS
     law: str = "sequential"
 
     def to_json(self) -> dict[str, Any]:
         """The proposal as DIR/proposal.json stores it."""
         return {"format": FORMAT, "law": self.law, "eps": self.eps, "range_bins": RANGE_BINS,
-                "grid": {str(k): v for k, v in GRID.items()}, "weights": self.weights}
+                "grid": {str(k): v for k, v in GRID.items()}, "components": [c.to_json() for c in self.components]}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Proposal:
@@ -113,13 +141,32 @@ class Proposal:
         if not isinstance(data, dict) or data.get("format") != FORMAT:
             raise PrscError(f"not a prsc proposal (expected \"format\": \"{FORMAT}\")")
         eps = float(data.get("eps", DEFAULT_EPS))
-        if not 0.0 < eps <= 1.0:
-            raise PrscError(f"a proposal's eps must be in (0, 1], got {eps}")
-        weights = {str(k): [float(x) for x in v] for k, v in data.get("weights", {}).items()}
-        for site, w in weights.items():
-            if any(x < 0 or not np.isfinite(x) for x in w) or not sum(w) > 0:
-                raise PrscError(f"proposal site {site}: weights must be >= 0, finite and not all 0")
-        return cls(weights, eps, str(data.get("law", "sequential")))
+        if not 0.0 <= eps <= 1.0:
+            raise PrscError(f"a proposal's eps must be in [0, 1], got {eps}")
+        components = []
+        for k, item in enumerate(data.get("components", [])):
+            try:
+                share, spec_share = float(item["share"]), float(item["spec_share"])
+                cells = {str(site): {int(c): float(w) for c, w in ws.items()} for site, ws in item["cells"].items()}
+            except (KeyError, TypeError, ValueError, AttributeError):
+                raise PrscError(f"proposal component {k}: expected share, spec_share and cells") from None
+            weights = [w for ws in cells.values() for w in ws.values()]
+            if not (share >= 0 and 0.0 <= spec_share <= 1.0) or any(w < 0 or not np.isfinite(w) for w in weights):
+                raise PrscError(f"proposal component {k}: share, spec_share and weights must be >= 0 and finite "
+                                "(spec_share <= 1)")
+            components.append(Component(share, spec_share, cells))
+        if components and not sum(c.share for c in components) > 0:
+            raise PrscError("a proposal's component shares must not all be 0")
+        return cls(tuple(components), eps, str(data.get("law", "sequential")))
+
+    def site_density(self, site: str, mass: np.ndarray) -> np.ndarray:
+        """Per cell of a site, the proposal's marginal density over the spec's (1 where it keeps the spec's law)."""
+        if not self.components:
+            return np.where(mass > 0, 1.0, 0.0)
+        total = sum(c.share for c in self.components)
+        mixed = sum(c.share / total * np.array([c.site_ratio(site, k, mass) for k in range(len(mass))])
+                    for c in self.components)
+        return np.where(mass > 0, self.eps + (1 - self.eps) * mixed, 0.0)
 
     def scene_state(self) -> ProposalState:
         """The per-scene state a SceneContext carries while a scene is drawn."""
@@ -150,26 +197,42 @@ def region_cells(region: Any) -> Cells | None:
         return hit[1]
     if len(_CELLS) > 4096:
         _CELLS.clear()
-    cells = None if region.point is not None else cut_into_cells(region.poly, region.lo, region.hi, region.measure, region.dim)
+    cells = None if region.point is not None else cut_into_cells(
+        lambda box: prepare_sampler(intersect(region.poly, box)), region.lo, region.hi, region.measure, region.dim)
     _CELLS[id(region)] = (region, cells)
+    return cells
+
+
+def free_space_cells(free: UniformSampler, region: Any, obstacles: list[Polytope]) -> Cells | None:
+    """The cells of a static region minus static obstacles (each cell decomposed exactly, cut once)."""
+    hit = _CELLS.get(id(free))
+    if hit is not None and hit[0] is free:
+        return hit[1]
+    lo, hi = free.bounds()
+    cells = cut_into_cells(lambda box: free_space_sampler(intersect(region.poly, box), obstacles), lo, hi,
+                           free.measure, free.dim)
+    _CELLS[id(free)] = (free, cells)
     return cells
 
 
 @dataclass
 class Draw:
-    """One site's draw in a scene: its density ratio p/q and where it fell (normalised coordinates)."""
+    """One site's draw in a scene: where it fell (normalised coordinates), its cell and the cells' spec masses."""
 
-    ratio: float
     coords: list[float]
+    cell: int
+    mass: np.ndarray
 
 
 class ProposalState:
-    """The draws of one scene under a proposal: site -> Draw, forgotten on a backtrack."""
+    """The draws of one scene under a proposal: (site, level) -> Draw, forgotten on a backtrack."""
 
     def __init__(self, proposal: Proposal) -> None:
         self.proposal = proposal
         self.draws: dict[tuple[str, int], Draw] = {}
         self.masses: dict[str, np.ndarray] = {}  # per site, the spec's mass of each cell (for fitting)
+        self.component: Component | None = None
+        self.chosen = not proposal.components  # no components: every site keeps the spec's law
 
     def rollback(self, level: int) -> None:
         """Forget the draws made while placing objects >= level (SceneContext.rollback)."""
@@ -177,8 +240,14 @@ class ProposalState:
             del self.draws[key]
 
     def weight(self) -> float:
-        """The scene's importance weight: the product of its sites' ratios."""
-        return float(np.prod([d.ratio for d in self.draws.values()])) if self.draws else 1.0
+        """The scene's importance weight p / q: q / p = eps + (1 - eps) sum_k share_k prod_sites ratio_k."""
+        components = self.proposal.components
+        if not components:
+            return 1.0
+        total = sum(c.share for c in components)
+        mixed = sum(c.share / total * float(np.prod([c.site_ratio(site, d.cell, d.mass) for (site, _), d in self.draws.items()]))
+                    for c in components)
+        return 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * mixed)
 
     def features(self) -> dict[str, list[float]]:
         """Where each site's draw fell (normalised coordinates), by site."""
@@ -187,37 +256,50 @@ class ProposalState:
             out[f"{site}@{level}" if site in out else site] = draw.coords
         return out
 
-    def _pick(self, site: str, mass: np.ndarray, u: float, v: float) -> tuple[int | None, np.ndarray]:
-        """The cell to draw from (None: the spec's law) and the site's weights."""
-        w = self.proposal.weights.get(site)
-        weights = mass if w is None or len(w) != len(mass) else np.asarray(w, dtype=float) * (mass > 0)
-        total = weights.sum()
-        if not total > 0:
-            weights, total = mass, mass.sum()
-        weights = weights / total
-        if u < self.proposal.eps:
-            return None, weights
-        return min(int(np.searchsorted(np.cumsum(weights), v, side="right")), len(weights) - 1), weights
+    def _choose(self, ctx: Any) -> Component | None:
+        """The scene's component (drawn once, at its first site): None for the spec's law."""
+        if not self.chosen:
+            self.chosen = True
+            components = self.proposal.components
+            if ctx.uniform() >= self.proposal.eps:
+                shares = np.cumsum([c.share for c in components])
+                pick = int(np.searchsorted(shares, ctx.uniform() * shares[-1], side="right"))
+                self.component = components[min(pick, len(components) - 1)]
+        return self.component
+
+    def _pick(self, site: str, mass: np.ndarray, ctx: Any) -> int | None:
+        """The cell the scene's component draws this site from (None: the spec's law)."""
+        component = self._choose(ctx)
+        weights = None if component is None else component.cells.get(site)
+        if not weights:
+            return None
+        cells = [c for c in weights if c < len(mass) and mass[c] > 0 and weights[c] > 0]
+        if not cells or ctx.uniform() < component.spec_share:  # type: ignore[union-attr]
+            return None
+        shares = np.cumsum([weights[c] for c in cells])
+        return cells[min(int(np.searchsorted(shares, ctx.uniform() * shares[-1], side="right")), len(cells) - 1)]
 
     def position(self, name: str, level: int, region: Any, ctx: Any) -> np.ndarray:
         """A position drawn from the proposal on the prepared region (region coordinates)."""
         cells = region_cells(region)
         if cells is None:
             return region.draw(ctx.rng, "exact", 1)
-        site = f"position:{name}"
+        return self._cell_draw(f"position:{name}", level, cells, lambda: region.draw(ctx.rng, "exact", 1), ctx)
+
+    def free_position(self, name: str, level: int, free: UniformSampler, region: Any, obstacles: list[Polytope],
+                      ctx: Any) -> np.ndarray:
+        """A position drawn from the proposal on a static free space (region minus obstacles)."""
+        cells = free_space_cells(free, region, obstacles)
+        if cells is None:
+            return free.sample_one(ctx.rng)
+        return self._cell_draw(f"position:{name}", level, cells, lambda: free.sample_one(ctx.rng), ctx)
+
+    def _cell_draw(self, site: str, level: int, cells: Cells, spec_draw: Callable[[], np.ndarray], ctx: Any) -> np.ndarray:
+        """A point from the scene's component on the site's cells (spec_draw: one draw of the spec's law)."""
         self.masses[site] = cells.mass
-        if site not in self.proposal.weights:  # the spec's law, draw for draw as without a proposal
-            p = region.draw(ctx.rng, "exact", 1)
-            self.draws[(site, level)] = Draw(1.0, [round(float(x), 6) for x in cells.coords(p)])
-            return p
-        cell, weights = self._pick(site, cells.mass, ctx.uniform(), ctx.uniform())
-        if cell is not None and cells.samplers[cell] is None:
-            cell = None  # rounding put the pick on an empty cell: fall back to the spec's law
-        p = region.draw(ctx.rng, "exact", 1) if cell is None else cells.samplers[cell].sample_one(ctx.rng)
-        at = cells.cell_of(p)
-        f = cells.mass[at]
-        ratio = 1.0 if f <= 0 else 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * weights[at] / f)
-        self.draws[(site, level)] = Draw(ratio, [round(float(x), 6) for x in cells.coords(p)])
+        cell = self._pick(site, cells.mass, ctx)
+        p = spec_draw() if cell is None or cells.samplers[cell] is None else cells.samplers[cell].sample_one(ctx.rng)  # type: ignore[union-attr]
+        self.draws[(site, level)] = Draw([round(float(x), 6) for x in cells.coords(p)], cells.cell_of(p), cells.mass)
         return p
 
     def spec_position(self, name: str, level: int) -> None:
@@ -226,19 +308,13 @@ class ProposalState:
 
     def unit(self, site: str, ctx: Any) -> float:
         """A draw on [0, 1) for a range at `site` (spec law: uniform)."""
-        mass = np.full(RANGE_BINS, 1.0 / RANGE_BINS)
         site = f"range:{site}"
-        self.masses[site] = mass
-        if site not in self.proposal.weights:  # the spec's law, draw for draw as without a proposal
-            u = ctx.uniform()
-            self.draws[(site, ctx.level)] = Draw(1.0, [round(u, 6)])
-            return u
-        cell, weights = self._pick(site, mass, ctx.uniform(), ctx.uniform())
-        x = ctx.uniform()
-        u = x if cell is None else (cell + x) / RANGE_BINS
-        at = min(int(u * RANGE_BINS), RANGE_BINS - 1)
-        ratio = 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * weights[at] / mass[at])
-        self.draws[(site, ctx.level)] = Draw(ratio, [round(u, 6)])
+        self.masses[site] = RANGE_MASS
+        cell = self._pick(site, RANGE_MASS, ctx)
+        u = ctx.uniform()
+        if cell is not None:
+            u = (cell + u) / RANGE_BINS
+        self.draws[(site, ctx.level)] = Draw([round(u, 6)], min(int(u * RANGE_BINS), RANGE_BINS - 1), RANGE_MASS)
         return u
 
 
@@ -248,49 +324,140 @@ def cell_index(coords: list[float], cells: int) -> int:
     return _flat(np.asarray(coords, dtype=float), k)
 
 
+def _site_cells(features: dict[str, list[float]], masses: dict[str, np.ndarray]) -> dict[str, int]:
+    """The cell of each site an episode drew (sites without masses are skipped)."""
+    return {site: cell_index(coords, len(masses[site])) for site, coords in features.items() if site in masses}
+
+
 def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
                        smoothing: float = 0.7) -> Proposal:
-    """One cross-entropy update toward the failures (elite set = the failed episodes).
+    """One cross-entropy update toward the failures (elite set = the failed episodes): one product component.
 
     Per site the maximiser of sum over failures of W log q is the failures' importance-weighted
     share per cell; it is mixed with the current weights (`smoothing`, as VerifAI does) so no
-    cell of positive mass ever gets weight zero. `episodes`: (features, weight, failed)."""
-    weights = dict(proposal.weights)
+    cell of positive mass ever gets weight zero. Each site keeps SITE_EPS of the spec's law.
+    `episodes`: (features, weight, failed)."""
+    old = proposal.components[0].cells if proposal.components else {}
+    cells: dict[str, dict[int, float]] = {}
     for site, mass in masses.items():
-        old = np.asarray(weights.get(site, mass), dtype=float)
-        if len(old) != len(mass):
-            old = mass
+        before = np.array([old[site].get(c, 0.0) for c in range(len(mass))]) if site in old else np.asarray(mass, float)
         target = np.zeros(len(mass))
         for features, w, failed in episodes:
             if failed and site in features:
                 target[cell_index(features[site], len(mass))] += w
         target *= mass > 0
-        if not target.sum() > 0:
+        if not target.sum() > 0 or not before.sum() > 0:
+            if site in old:
+                cells[site] = old[site]
             continue
-        new = smoothing * target / target.sum() + (1 - smoothing) * old / old.sum()
-        weights[site] = [round(float(x), 9) for x in new / new.sum()]
-    return Proposal(weights, proposal.eps, proposal.law)
+        new = smoothing * target / target.sum() + (1 - smoothing) * before / before.sum()
+        cells[site] = {c: round(float(x), 9) for c, x in enumerate(new / new.sum()) if x > 0}
+    return Proposal((Component(1.0, SITE_EPS, cells),) if cells else (), 0.0, proposal.law)
 
 
-def failure_rate_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
-                      sharpness: float = 2.0) -> Proposal:
-    """Per site, weights proportional to each cell's spec mass times its failure rate to the power `sharpness`.
+def failure_mixture_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
+                         spec_share: float = 0.3) -> Proposal:
+    """One component per failure so far: each site redrawn in the cell the failure drew (spec_share: the spec's law).
 
-    The rate of a cell is (failures + 1) / (episodes + 2) over every episode so far that drew in
-    it (a Beta(1, 1) prior: a cell never tried counts as even odds, so it is explored). Unlike
-    the cross-entropy step it follows where failures are *frequent*, not where their
-    weighted mass lies, and a site the outcome does not depend on keeps near-equal rates and
-    so stays near the spec's law."""
-    weights = dict(proposal.weights)
-    for site, mass in masses.items():
-        tried, failed = np.zeros(len(mass)), np.zeros(len(mass))
-        for features, _, fail in episodes:
-            if site in features:
-                cell = cell_index(features[site], len(mass))
-                tried[cell] += 1
-                failed[cell] += fail
-        if not failed.sum() > 0:
-            continue
-        new = mass * ((failed + 1) / (tried + 2)) ** sharpness
-        weights[site] = [round(float(x), 9) for x in new / new.sum()]
-    return Proposal(weights, proposal.eps, proposal.law)
+    A mixture keeps the failure modes apart (a cube near a wall *or* out of the camera's view,
+    not the product of their marginals), and each scene's weight is bounded by 1 / eps."""
+    components = tuple(Component(1.0, spec_share, {site: {cell: 1.0} for site, cell in _site_cells(features, masses).items()})
+                       for features, _, failed in episodes if failed)
+    return Proposal(components, DEFAULT_EPS, proposal.law)
+
+
+@dataclass(frozen=True)
+class Leaf:
+    """A box of the inputs: per (site, axis) a half-open range of grid digits; its episodes and failures."""
+
+    bounds: dict[tuple[str, int], tuple[int, int]]
+    episodes: int
+    failures: int
+
+
+def _per_axis(mass: np.ndarray, dims: int) -> int:
+    """Grid cells per axis of a site with len(mass) cells over `dims` axes."""
+    return int(round(len(mass) ** (1.0 / max(dims, 1))))
+
+
+def _digits(features: dict[str, list[float]], masses: dict[str, np.ndarray], sites: list[str]) -> list[int] | None:
+    """An episode's grid digit per (site, axis) over `sites`, or None when it misses a site."""
+    out = []
+    for site in sites:
+        coords = features.get(site)
+        if coords is None:
+            return None
+        k = _per_axis(masses[site], len(coords))
+        out += [min(int(x * k), k - 1) for x in coords]
+    return out
+
+
+def grow_tree(x: np.ndarray, y: np.ndarray, ks: list[int], min_leaf: int, depth: int) -> list[Leaf]:
+    """Leaves of a classification tree on grid digits x (episodes, axes) and failures y (Gini splits at digit steps)."""
+    def grow(rows: np.ndarray, bounds: dict[int, tuple[int, int]], level: int) -> list[tuple[dict, np.ndarray]]:
+        best, n = None, len(rows)
+        if level < depth and n >= 2 * min_leaf:
+            f = y[rows].sum()
+            impurity = f * (n - f) / n
+            for axis, k in enumerate(ks):
+                lo, hi = bounds.get(axis, (0, k))
+                for cut in range(lo + 1, hi):
+                    left = x[rows, axis] < cut
+                    nl = int(left.sum())
+                    if nl < min_leaf or n - nl < min_leaf:
+                        continue
+                    fl = y[rows][left].sum()
+                    fr = f - fl
+                    gain = impurity - fl * (nl - fl) / nl - fr * (n - nl - fr) / (n - nl)
+                    if best is None or gain > best[0] + 1e-12:
+                        best = (gain, axis, cut, left)
+        if best is None or best[0] <= 1e-9:
+            return [(bounds, rows)]
+        _, axis, cut, left = best
+        lo, hi = bounds.get(axis, (0, ks[axis]))
+        return (grow(rows[left], {**bounds, axis: (lo, cut)}, level + 1)
+                + grow(rows[~left], {**bounds, axis: (cut, hi)}, level + 1))
+
+    return [Leaf(b, len(r), int(y[r].sum())) for b, r in grow(np.arange(len(y)), {}, 0)]  # type: ignore[arg-type]
+
+
+def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
+                      sharpness: float = 1.5, min_leaf: int = 8, depth: int = 5, replay: float = 0.5,
+                      replay_spec_share: float = 0.0) -> Proposal:
+    """A mixture over the leaves of a failure-rate tree: leaf L drawn with share ∝ (its spec mass) × rate_L ** sharpness.
+
+    The tree splits the inputs (every site's grid digits) where the failure rate changes, so a
+    failure mode that needs two inputs at once (a cube both in its tray's front and the tray in
+    the camera's far corner) is one leaf; inside a leaf every site keeps the spec's law
+    restricted to the leaf's cells. With sharpness 1 the proposal is the spec's law times the
+    failure rate, whose weights have the variance of plain sampling; above 1 it concentrates
+    more. The rate of a leaf is shrunk toward the overall rate (a Beta prior of 2 episodes)."""
+    sites = sorted(masses)
+    rows = [(d, failed) for features, _, failed in episodes
+            if (d := _digits(features, masses, sites)) is not None]
+    if not rows or not any(f for _, f in rows):
+        return proposal
+    x = np.array([d for d, _ in rows], dtype=int)
+    y = np.array([f for _, f in rows], dtype=float)
+    dims = {site: len(next(f[site] for f, _, _ in episodes if site in f)) for site in sites}
+    axes = [(site, a) for site in sites for a in range(dims[site])]
+    ks = [_per_axis(masses[site], dims[site]) for site, _ in axes]
+    overall = float(y.mean())
+    components = []
+    for leaf in grow_tree(x, y, ks, min_leaf, depth):
+        rate = (leaf.failures + 2 * overall) / (leaf.episodes + 2)
+        cells: dict[str, dict[int, float]] = {}
+        share = 1.0
+        for site in sorted({axes[a][0] for a in leaf.bounds}):
+            k = _per_axis(masses[site], dims[site])
+            ranges = [leaf.bounds.get(axes.index((site, a)), (0, k)) for a in range(dims[site])]
+            inside = {c: float(m) for c, m in enumerate(masses[site]) if m > 0 and all(
+                lo <= d < hi for d, (lo, hi) in zip(np.unravel_index(c, (k,) * dims[site]), ranges))}
+            share *= sum(inside.values())
+            cells[site] = inside
+        components.append(Component(share * rate ** sharpness, 0.0, cells))
+    if replay > 0:
+        total = sum(c.share for c in components)
+        kernels = failure_mixture_step(proposal, masses, episodes, replay_spec_share).components
+        components += [Component(replay / (1 - replay) * total / len(kernels), c.spec_share, c.cells) for c in kernels]
+    return Proposal(tuple(components), DEFAULT_EPS, proposal.law)
