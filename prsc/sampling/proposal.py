@@ -1,25 +1,26 @@
 """A proposal law over a spec's random inputs that only reweights its feasible set.
 
-Each *site* (one object's position, one `(lo, hi)` range draw) gets a defensive mixture
+Every *site* (one object's position, one `(lo, hi)` range draw) is cut into cells: for a
+position, a grid over the bounding box of the object's feasible region *in the scene at
+hand* (cell c is the region cut by the grid box, prepared by the same exact sampler, so
+every draw is inside the region); for a range, equal bins of its unit interval. Cells live
+in the region's normalised coordinates, so "the corner of the tray" is the same cell
+wherever the tray went. The proposal is a defensive mixture over whole scenes,
 
-    q = eps * (the spec's law on the site) + (1 - eps) * sum_c w_c * uniform(cell c)
+    q = eps * p + (1 - eps) * sum_k share_k * q_k,
 
-where the cells partition the site's domain: for a position, a grid over the bounding box
-of the object's feasible region *in the scene at hand* (cell c is the region cut by the
-grid box, prepared by the same exact sampler, so every draw is inside the region); for a
-range, equal bins of its unit interval. Cells live in the region's normalised coordinates,
-so "the corner of the tray" is the same cell wherever the tray went. The density ratio of
-a draw is p/q = 1 / (eps + (1 - eps) w_c / f_c), f_c the spec's mass of cell c (its share
-of the region's measure), so the scene's importance weight under the *sequential* law
-(docs/sampling.md) is the product over its sites (docs/falsify.md says what it targets).
-A site without weights (every site of the initial proposal) draws exactly as the spec's law
-does, draw for draw, with ratio 1: round 0 of a campaign is the scenes `prsc sample` draws.
+each component q_k a product over sites of (spec_share * the spec's law + the rest on
+weighted cells). A scene's importance weight under the *sequential* law (docs/sampling.md)
+is p / q = 1 / (eps + (1 - eps) sum_k share_k prod_sites r_k), r_k the component's ratio
+at the draw's cell (Component.site_ratio): at most 1 / eps (docs/falsify.md). A proposal
+without components draws exactly as the spec's law does, draw for draw, with weight 1:
+round 0 of a campaign is the scenes `prsc sample` draws.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
@@ -352,7 +353,7 @@ def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episod
             continue
         new = smoothing * target / target.sum() + (1 - smoothing) * before / before.sum()
         cells[site] = {c: round(float(x), 9) for c, x in enumerate(new / new.sum()) if x > 0}
-    return Proposal((Component(1.0, SITE_EPS, cells),) if cells else (), 0.0, proposal.law)
+    return Proposal((Component(1.0, SITE_EPS, cells),) if cells else (), DEFAULT_EPS, proposal.law)
 
 
 def failure_mixture_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
