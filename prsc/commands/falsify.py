@@ -148,12 +148,13 @@ def run(args: argparse.Namespace) -> int:
     atomic_write(out / MARKER, json.dumps(campaign) + "\n")
     console = Console(stderr=True)
     proposal = Proposal()
-    sampler = compile_sampler(str(source), args.include, proposal=proposal if args.method != "uniform" else None)
+    # An empty proposal draws exactly as the spec's law does, recording where each draw fell (for the clusters).
+    sampler = compile_sampler(str(source), args.include, proposal=proposal)
     records: list[dict] = []
     masses: dict = {}
     start = 0
     for number, size in enumerate(round_sizes(args.budget, args.rounds)):
-        if args.method != "uniform":
+        if number and args.method != "uniform":
             sampler = compile_sampler(str(source), args.include, proposal=proposal)
         scenes, info, seen = draw_round(sampler, args.seed, start, size)
         masses.update(seen)

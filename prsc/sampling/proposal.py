@@ -423,7 +423,7 @@ def grow_tree(x: np.ndarray, y: np.ndarray, ks: list[int], min_leaf: int, depth:
 
 
 def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
-                      sharpness: float = 1.5, min_leaf: int = 8, depth: int = 5, replay: float = 0.5,
+                      sharpness: float = 1.0, min_leaf: int = 8, depth: int = 5, replay: float = 0.6,
                       replay_spec_share: float = 0.0) -> Proposal:
     """A mixture over the leaves of a failure-rate tree: leaf L drawn with share ∝ (its spec mass) × rate_L ** sharpness.
 
