@@ -356,15 +356,11 @@ def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episod
     return Proposal((Component(1.0, SITE_EPS, cells),) if cells else (), DEFAULT_EPS, proposal.law)
 
 
-def failure_mixture_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
-                         spec_share: float = 0.3) -> Proposal:
-    """One component per failure so far: each site redrawn in the cell the failure drew (spec_share: the spec's law).
-
-    A mixture keeps the failure modes apart (a cube near a wall *or* out of the camera's view,
-    not the product of their marginals), and each scene's weight is bounded by 1 / eps."""
-    components = tuple(Component(1.0, spec_share, {site: {cell: 1.0} for site, cell in _site_cells(features, masses).items()})
-                       for features, _, failed in episodes if failed)
-    return Proposal(components, DEFAULT_EPS, proposal.law)
+def replay_components(masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
+                      spec_share: float = 0.0) -> list[Component]:
+    """One component per failure so far: every site redrawn in the cell the failure drew (spec_share: the spec's law)."""
+    return [Component(1.0, spec_share, {site: {cell: 1.0} for site, cell in _site_cells(features, masses).items()})
+            for features, _, failed in episodes if failed]
 
 
 @dataclass(frozen=True)
@@ -425,14 +421,16 @@ def grow_tree(x: np.ndarray, y: np.ndarray, ks: list[int], min_leaf: int, depth:
 def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
                       sharpness: float = 1.0, min_leaf: int = 8, depth: int = 5, replay: float = 0.6,
                       replay_spec_share: float = 0.0) -> Proposal:
-    """A mixture over the leaves of a failure-rate tree: leaf L drawn with share ∝ (its spec mass) × rate_L ** sharpness.
+    """A mixture over the leaves of a failure-rate tree (share ∝ spec mass × rate ** sharpness) and the failures found.
 
     The tree splits the inputs (every site's grid digits) where the failure rate changes, so a
-    failure mode that needs two inputs at once (a cube both in its tray's front and the tray in
+    failure mode that needs two inputs at once (the cube in its tray's front *and* the tray in
     the camera's far corner) is one leaf; inside a leaf every site keeps the spec's law
-    restricted to the leaf's cells. With sharpness 1 the proposal is the spec's law times the
+    restricted to the leaf's cells. With sharpness 1 that part is the spec's law times the
     failure rate, whose weights have the variance of plain sampling; above 1 it concentrates
-    more. The rate of a leaf is shrunk toward the overall rate (a Beta prior of 2 episodes)."""
+    more. A leaf's rate is shrunk toward the overall one (a Beta prior of 2 episodes). The
+    `replay` share of the mixture redraws near the failures found (replay_components): it
+    finds the most failures, but its scenes weigh almost nothing in the estimate."""
     sites = sorted(masses)
     rows = [(d, failed) for features, _, failed in episodes
             if (d := _digits(features, masses, sites)) is not None]
@@ -459,6 +457,6 @@ def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episode
         components.append(Component(share * rate ** sharpness, 0.0, cells))
     if replay > 0:
         total = sum(c.share for c in components)
-        kernels = failure_mixture_step(proposal, masses, episodes, replay_spec_share).components
+        kernels = replay_components(masses, episodes, replay_spec_share)
         components += [Component(replay / (1 - replay) * total / len(kernels), c.spec_share, c.cells) for c in kernels]
     return Proposal(tuple(components), DEFAULT_EPS, proposal.law)

@@ -110,3 +110,13 @@ def test_a_bad_proposal_file_is_a_clear_error(tmp_path):
         Proposal.from_json(bad)
     with pytest.raises(PrscError, match="not a prsc proposal"):
         Proposal.from_json({"weights": {}})
+
+
+def test_importance_weights_average_one_under_a_learnt_proposal(campaign):
+    # E_q[p / q] = 1 for any proposal: the trays (cells of the free space left by the robots),
+    # the cube and the camera's ranges are all reweighted, and the ratios must account for it.
+    _, used, _ = campaign
+    _, info, _ = draw_round(compile_sampler(str(SPEC), proposal=used[-1]), SEED + 1, 0, 400)
+    w = np.array([i["weight"] for i in info])
+    assert {"position:tr_1", "position:c1"} <= set(info[0]["features"])
+    assert w.std() > 0.3 and abs(w.mean() - 1.0) < 4 * w.std() / math.sqrt(len(w)), (w.mean(), w.std())
