@@ -83,7 +83,7 @@ def draw_round(sampler: Any, seed: int, start: int, count: int) -> tuple[list[di
 
 def next_proposal(method: str, proposal: Any, masses: dict, records: list[dict]) -> Any:
     """The proposal for the next round, learnt from every episode so far (the same one under uniform)."""
-    from prsc.sampling.proposal import cross_entropy_step, failure_tree_step
+    from prsc.sampling.proposal_search import cross_entropy_step, failure_tree_step
 
     if method == "uniform":
         return proposal

@@ -14,7 +14,8 @@ from prsc.commands.falsify_report import failure_clusters, weighted_estimate
 from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import compile_sampler
-from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_tree_step
+from prsc.sampling.proposal import Proposal
+from prsc.sampling.proposal_search import cross_entropy_step, failure_tree_step
 from tests.data.corner_controller import in_corner
 from tests.sampling.scene_checks import check_scenes
 
