@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +29,7 @@ from prsc.constraints.model import COLLISION
 from prsc.errors import PrscError
 
 METHODS = ("failure-tree", "cross-entropy", "uniform")
+STRATA_STREAM = 0x5354  # entropy word that keeps a round's offset apart from scene_rng(seed, index)
 MARKER = "falsify.json"  # what this folder's campaign was: its results.jsonl is prsc falsify's own
 
 
@@ -79,6 +81,15 @@ def draw_round(sampler: Any, seed: int, start: int, count: int) -> tuple[list[di
         info.append({"weight": state.weight(), "features": state.features(),
                      "collision_rejections": int(result.stats.counts.get(COLLISION, 0))})
     return scenes, info, masses
+
+
+def round_strata(seed: int, number: int, start: int, size: int) -> Any:
+    """Round `number`'s systematic component choice: one offset from its own Generator (not any scene's)."""
+    import numpy as np
+
+    from prsc.sampling.proposal import Strata
+
+    return Strata(start, size, float(np.random.default_rng([seed, number, STRATA_STREAM]).random()))
 
 
 def next_proposal(method: str, proposal: Any, masses: dict, records: list[dict]) -> Any:
@@ -155,7 +166,8 @@ def run(args: argparse.Namespace) -> int:
     start = 0
     for number, size in enumerate(round_sizes(args.budget, args.rounds)):
         if number and args.method != "uniform":
-            sampler = compile_sampler(str(source), args.include, proposal=proposal)
+            sampler = compile_sampler(str(source), args.include,
+                                      proposal=replace(proposal, strata=round_strata(args.seed, number, start, size)))
         scenes, info, seen = draw_round(sampler, args.seed, start, size)
         masses.update(seen)
         if start + size <= len(finished):  # a finished round of the killed campaign: its draws rebuild the proposal

@@ -94,7 +94,7 @@ class SequentialSampler:
         """Scene `index` under `seed`; PrscError if it cannot be sampled within the limits."""
         ctx = SceneContext(scene_rng(seed, index))
         if self.proposal is not None and self.method == "exact":
-            ctx.proposal = self.proposal.scene_state()
+            ctx.proposal = self.proposal.scene_state(index)
         run = Attempt(ctx, RejectionStats(scenes=1), self.limits)
         attempts = self.limits.joint_attempts if self.joint else self.limits.scene_attempts
         tried = 0  # the work budget may end the attempts early: the message says how many ran

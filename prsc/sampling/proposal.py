@@ -125,12 +125,31 @@ class Component:
 
 
 @dataclass(frozen=True)
+class Strata:
+    """Systematic choice of components for scenes start..start+count-1: scene start+j takes the point (offset + j) / count.
+
+    Over the points, the spec's law and each component get count * share scenes up to one
+    (share: eps, or (1 - eps) share_k), so the mixture weight p / q keeps the estimate unbiased
+    while the groups' sizes no longer vary by chance (docs/falsify.md)."""
+
+    start: int
+    count: int
+    offset: float  # in [0, 1), one uniform draw per round
+
+    def point(self, index: int) -> float | None:
+        """Scene `index`'s point in [0, 1), or None when it is outside the strata."""
+        j = index - self.start
+        return (self.offset + j) / self.count if 0 <= j < self.count else None
+
+
+@dataclass(frozen=True)
 class Proposal:
     """eps of the spec's law plus a mixture of product components (none: the spec's law, draw for draw)."""
 
     components: tuple[Component, ...] = ()
     eps: float = DEFAULT_EPS
     law: str = "sequential"
+    strata: Strata | None = None  # a campaign round's systematic component choice (not stored)
 
     def to_json(self) -> dict[str, Any]:
         """The proposal as DIR/proposal.json stores it."""
@@ -170,9 +189,9 @@ class Proposal:
                     for c in self.components)
         return np.where(mass > 0, self.eps + (1 - self.eps) * mixed, 0.0)
 
-    def scene_state(self) -> ProposalState:
-        """The per-scene state a SceneContext carries while a scene is drawn."""
-        return ProposalState(self)
+    def scene_state(self, index: int = -1) -> ProposalState:
+        """The per-scene state a SceneContext carries while scene `index` is drawn."""
+        return ProposalState(self, None if self.strata is None else self.strata.point(index))
 
 
 def load_proposal(path: str | Path) -> Proposal:
@@ -229,8 +248,9 @@ class Draw:
 class ProposalState:
     """The draws of one scene under a proposal: (site, level) -> Draw, forgotten on a backtrack."""
 
-    def __init__(self, proposal: Proposal) -> None:
+    def __init__(self, proposal: Proposal, point: float | None = None) -> None:
         self.proposal = proposal
+        self.point = point  # the scene's systematic point in [0, 1) (Strata), or None: drawn at random
         self.draws: dict[tuple[str, int], Draw] = {}
         self.masses: dict[str, np.ndarray] = {}  # per site, the spec's mass of each cell (for fitting)
         self.component: Component | None = None
@@ -262,10 +282,12 @@ class ProposalState:
         """The scene's component (drawn once, at its first site): None for the spec's law."""
         if not self.chosen:
             self.chosen = True
-            components = self.proposal.components
-            if ctx.uniform() >= self.proposal.eps:
+            components, eps = self.proposal.components, self.proposal.eps
+            u = ctx.uniform() if self.point is None else self.point
+            if u >= eps:
                 shares = np.cumsum([c.share for c in components])
-                pick = int(np.searchsorted(shares, ctx.uniform() * shares[-1], side="right"))
+                v = ctx.uniform() if self.point is None else (u - eps) / (1 - eps)
+                pick = int(np.searchsorted(shares, v * shares[-1], side="right"))
                 self.component = components[min(pick, len(components) - 1)]
         return self.component
 

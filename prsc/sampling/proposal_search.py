@@ -114,9 +114,17 @@ def grow_tree(x: np.ndarray, y: np.ndarray, ks: list[int], min_leaf: int, depth:
     return [Leaf(b, len(r), int(y[r].sum())) for b, r in grow(np.arange(len(y)), {}, 0)]  # type: ignore[arg-type]
 
 
+def _leaf_rate(leaves: list[Leaf], rates: list[float], digits: list[int] | None, overall: float) -> float:
+    """The failure rate of the leaf holding an episode's grid digits (the overall rate when it misses a site)."""
+    for leaf, rate in zip(leaves, rates):
+        if digits is not None and all(lo <= digits[a] < hi for a, (lo, hi) in leaf.bounds.items()):
+            return rate
+    return overall
+
+
 def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
                       sharpness: float = 1.0, min_leaf: int = 8, depth: int = 5, replay: float = 0.6,
-                      replay_spec_share: float = 0.0) -> Proposal:
+                      replay_spec_share: float = 0.0, replay_focus: float = 0.0) -> Proposal:
     """A mixture over the leaves of a failure-rate tree (share ∝ spec mass × rate ** sharpness) and the failures found.
 
     The tree splits the inputs (every site's grid digits) where the failure rate changes, so a
@@ -139,8 +147,9 @@ def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episode
     ks = [_per_axis(masses[site], dims[site]) for site, _ in axes]
     overall = float(y.mean())
     components = []
-    for leaf in grow_tree(x, y, ks, min_leaf, depth):
-        rate = (leaf.failures + 2 * overall) / (leaf.episodes + 2)
+    leaves = grow_tree(x, y, ks, min_leaf, depth)
+    rates = [(leaf.failures + 2 * overall) / (leaf.episodes + 2) for leaf in leaves]
+    for leaf, rate in zip(leaves, rates):
         cells: dict[str, dict[int, float]] = {}
         share = 1.0
         for site in sorted({axes[a][0] for a in leaf.bounds}):
@@ -154,5 +163,8 @@ def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episode
     if replay > 0:
         total = sum(c.share for c in components)
         kernels = replay_components(masses, episodes, replay_spec_share)
-        components += [Component(replay / (1 - replay) * total / len(kernels), c.spec_share, c.cells) for c in kernels]
+        focus = np.array([_leaf_rate(leaves, rates, _digits(features, masses, sites), overall) ** replay_focus
+                          for features, _, failed in episodes if failed])
+        components += [Component(replay / (1 - replay) * total * f / focus.sum(), c.spec_share, c.cells)
+                       for c, f in zip(kernels, focus)]
     return Proposal(tuple(components), DEFAULT_EPS, proposal.law)

@@ -4,17 +4,18 @@ fails, and their importance weights give the failure probability under the spec'
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from prsc.commands.falsify import draw_round
+from prsc.commands.falsify import draw_round, round_strata
 from prsc.commands.falsify_report import failure_clusters, weighted_estimate
 from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import compile_sampler
-from prsc.sampling.proposal import Proposal
+from prsc.sampling.proposal import Component, Proposal, Strata
 from prsc.sampling.proposal_search import cross_entropy_step, failure_tree_step
 from tests.data.corner_controller import in_corner
 from tests.sampling.scene_checks import check_scenes
@@ -24,10 +25,10 @@ SEED = 3
 
 
 def _rounds(rounds: int, size: int, step=cross_entropy_step) -> tuple[list[dict], list[Proposal], list[dict]]:
-    """Rounds of `step` against the corner controller: (records, proposals used, scenes)."""
+    """Rounds of `step` against the corner controller, as prsc falsify runs them: (records, proposals used, scenes)."""
     proposal, records, used, scenes, masses = Proposal(), [], [], [], {}
     for number in range(rounds):
-        sampler = compile_sampler(str(SPEC), proposal=proposal)
+        sampler = compile_sampler(str(SPEC), proposal=replace(proposal, strata=round_strata(SEED, number, number * size, size)))
         drawn, info, seen = draw_round(sampler, SEED, number * size, size)
         masses.update(seen)
         used.append(proposal)
@@ -94,6 +95,20 @@ def test_weighted_estimate_converges_to_the_corner_probability(campaign, corner_
     # The test can fail: the raw failure fraction under the proposal (the wrong law) is far off.
     raw = np.mean([r["outcome"] != "success" for r in records])
     assert abs(raw - p) > 5 * tolerance, (raw, p, tolerance)
+
+
+def test_a_round_gives_each_component_its_share_of_scenes_up_to_one():
+    # Systematic choice: of 50 scenes, eps = 0.1 of them keep the spec's law and the components
+    # (shares 0.3 and 0.7 of the rest) take 13.5 and 31.5, up to one, whatever the offset.
+    left = Component(0.3, 0.0, {"position:c1": {0: 1.0}})
+    right = Component(0.7, 0.0, {"position:c1": {63: 1.0}})
+    for offset in (0.0, 0.37, 0.99):
+        proposal = Proposal((left, right), 0.1, strata=Strata(100, 50, offset))
+        sampler = compile_sampler(str(SPEC), proposal=proposal)
+        picked = [sampler.sample(SEED, k).context.proposal.component for k in range(100, 150)]
+        counts = [sum(c is None for c in picked), sum(c is left for c in picked), sum(c is right for c in picked)]
+        assert counts[0] in (5, 6) and counts[1] in (13, 14) and counts[2] in (31, 32), (offset, counts)
+        assert sum(counts) == 50
 
 
 def test_failure_clusters_count_near_duplicates_once():
