@@ -123,18 +123,23 @@ def _leaf_rate(leaves: list[Leaf], rates: list[float], digits: list[int] | None,
 
 
 def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
-                      sharpness: float = 1.0, min_leaf: int = 8, depth: int = 5, replay: float = 0.6,
-                      replay_spec_share: float = 0.0, replay_focus: float = 0.0) -> Proposal:
+                      sharpness: float = 0.5, min_leaf: int = 8, depth: int = 5, replay: float = 0.7,
+                      replay_spec_share: float = 0.0, replay_focus: float = 1.0) -> Proposal:
     """A mixture over the leaves of a failure-rate tree (share ∝ spec mass × rate ** sharpness) and the failures found.
 
     The tree splits the inputs (every site's grid digits) where the failure rate changes, so a
     failure mode that needs two inputs at once (the cube in its tray's front *and* the tray in
     the camera's far corner) is one leaf; inside a leaf every site keeps the spec's law
-    restricted to the leaf's cells. With sharpness 1 that part is the spec's law times the
-    failure rate, whose weights have the variance of plain sampling; above 1 it concentrates
-    more. A leaf's rate is shrunk toward the overall one (a Beta prior of 2 episodes). The
-    `replay` share of the mixture redraws near the failures found (replay_components): it
-    finds the most failures, but its scenes weigh almost nothing in the estimate."""
+    restricted to the leaf's cells. With sharpness 1/2 that part is the spec's law times the
+    square root of the failure rate, the importance law of least variance for the failure
+    probability (q ∝ p sqrt(rate)): it leans toward failures without thinning the bulk of
+    the inputs, where a controller with diffuse failures has half its failure probability.
+    A leaf's rate is shrunk toward the overall one (a Beta prior of 2 episodes). The
+    `replay` share of the mixture redraws near the failures found (replay_components), each
+    failure in proportion to its leaf's rate ** replay_focus (a failure in a leaf that
+    mostly fails is a mode, one in a leaf that mostly succeeds is likely noise): it finds
+    the most failures, but its scenes weigh almost nothing in the estimate. The defaults
+    were chosen on surrogate controllers (docs/falsify.md)."""
     sites = sorted(masses)
     rows = [(d, failed) for features, _, failed in episodes
             if (d := _digits(features, masses, sites)) is not None]
