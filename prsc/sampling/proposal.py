@@ -126,7 +126,7 @@ class Component:
 
 @dataclass(frozen=True)
 class Strata:
-    """Systematic choice of components for scenes start..start+count-1: scene start+j takes the point (offset + j) / count.
+    """A round's systematic choice of components: scene start + j takes the point (offset + j) / count.
 
     Over the points, the spec's law and each component get count * share scenes up to one
     (share: eps, or (1 - eps) share_k), so the mixture weight p / q keeps the estimate unbiased
