@@ -1,14 +1,14 @@
 """`prsc falsify`: spend an episode budget where a controller fails, still inside the spec.
 
     prsc falsify FILE --controller TARGET --budget N --seed S [-o DIR] [--jobs J]
-                 [--executor local|ray] [--method cross-entropy|failure-rate|uniform] [--rounds R]
+                 [--executor local|ray] [--method failure-tree|cross-entropy|uniform] [--rounds R] [--resume]
 
 runs the budget in rounds. Every round's scenes are drawn by the exact sequential sampler
-from a proposal that only reweights the feasible set (prsc/sampling/proposal.py: per
-object position and per range draw, a defensive mixture of the spec's law and grid cells
-of the exact region), compiled as `prsc compile --target json,mjcf` does (DIR/round_RR/),
-and simulated; then a cross-entropy step (or --method failure-rate) moves the proposal
-toward the failed scenes.
+from a proposal that only reweights the feasible set (prsc/sampling/proposal.py: a defensive
+mixture of the spec's law and components that redraw each object position and range draw
+on grid cells of its exact region), compiled as `prsc compile --target json,mjcf` does
+(DIR/round_RR/), and simulated; then the proposal moves toward the failed scenes (a
+failure-rate tree over the inputs, or a cross-entropy step per input).
 Each episode of DIR/results.jsonl carries `round`, `weight` (the spec's sequential-law
 density over the proposal's) and `law`; the summary gives the importance-weighted
 failure probability under the spec's sequential law with a 95 % interval. Also in DIR:
@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -27,7 +28,8 @@ from prsc.commands.executors import add_executor_arguments
 from prsc.constraints.model import COLLISION
 from prsc.errors import PrscError
 
-METHODS = ("cross-entropy", "failure-rate", "uniform")
+METHODS = ("failure-tree", "cross-entropy", "uniform")
+STRATA_STREAM = 0x5354  # entropy word that keeps a round's offset apart from scene_rng(seed, index)
 MARKER = "falsify.json"  # what this folder's campaign was: its results.jsonl is prsc falsify's own
 
 
@@ -42,11 +44,11 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--controller", default=DEFAULT_CONTROLLER, metavar="TARGET",
                         help=f"package.module:name or path/to/file.py:name (default {DEFAULT_CONTROLLER})")
     parser.add_argument("--budget", type=int, default=100, help="episodes in all (default 100)")
-    parser.add_argument("--rounds", type=int, default=5, help="rounds the budget is split into (default 5)")
+    parser.add_argument("--rounds", type=int, default=10, help="rounds the budget is split into (default 10)")
     parser.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
-    parser.add_argument("--method", choices=METHODS, default="cross-entropy",
-                        help="cross-entropy (default, as VerifAI's), failure-rate (cells by their failure rate), "
-                             "or uniform (the spec's own law every round)")
+    parser.add_argument("--method", choices=METHODS, default="failure-tree",
+                        help="failure-tree (default: a mixture over the leaves of a failure-rate tree and the "
+                             "failures found), cross-entropy (VerifAI's, per input), or uniform (the spec's own law)")
     parser.add_argument("-o", "--output", type=Path, default=None, help="output folder (default out/falsify-<name>)")
     parser.add_argument("--max-sim-seconds", type=float, default=DEFAULT_MAX_SIM_SECONDS, metavar="S",
                         help="end an episode past S simulated seconds as outcome `timeout`")
@@ -54,6 +56,9 @@ def add_parser(subparsers: Any) -> None:
     add_executor_arguments(parser)
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
     parser.add_argument("--force", action="store_true", help="replace the scenes of another run in DIR")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue a killed campaign in DIR (same spec, seed, method, budget and rounds): "
+                             "its finished rounds are kept, their scenes redrawn only to rebuild the proposal")
 
 
 def round_sizes(budget: int, rounds: int) -> list[int]:
@@ -78,6 +83,41 @@ def draw_round(sampler: Any, seed: int, start: int, count: int) -> tuple[list[di
     return scenes, info, masses
 
 
+def round_strata(seed: int, number: int, start: int, size: int) -> Any:
+    """Round `number`'s systematic component choice: one offset from its own Generator (not any scene's)."""
+    import numpy as np
+
+    from prsc.sampling.proposal import Strata
+
+    return Strata(start, size, float(np.random.default_rng([seed, number, STRATA_STREAM]).random()))
+
+
+def next_proposal(method: str, proposal: Any, masses: dict, records: list[dict]) -> Any:
+    """The proposal for the next round, learnt from every episode so far (the same one under uniform)."""
+    from prsc.sampling.proposal_search import cross_entropy_step, failure_tree_step
+
+    if method == "uniform":
+        return proposal
+    episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
+    return (cross_entropy_step if method == "cross-entropy" else failure_tree_step)(proposal, masses, episodes)
+
+
+def finished_records(out: Path, campaign: dict) -> list[dict]:
+    """The episodes of the finished rounds of the same campaign in `out` (--resume); an error for another one."""
+    try:
+        marker = json.loads((out / MARKER).read_text(encoding="utf-8"))
+        lines = (out / "results.jsonl").read_text(encoding="utf-8").splitlines()
+    except (OSError, ValueError):
+        raise PrscError(f"--resume: {out} holds no prsc falsify campaign to continue") from None
+    if marker != campaign:
+        raise PrscError(f"--resume: {out} holds another campaign ({marker}); "
+                        "resume it with the same spec, --seed, --method, --budget and --rounds")
+    records = [json.loads(line) for line in lines if line.strip()]
+    if [r.get("index") for r in records] != list(range(len(records))):
+        raise PrscError(f"--resume: {out / 'results.jsonl'} is not a campaign's episodes in order")
+    return records
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the rounds, then write the summary, clusters, plots and the proposal."""
     if args.budget < 1:
@@ -99,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.commands.falsify_report import write_report
     from prsc.files import atomic_write
     from prsc.sampling import compile_sampler
-    from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_rate_step
+    from prsc.sampling.proposal import Proposal
 
     source = Path(args.file)
     if source.suffix != ".prs":
@@ -113,21 +153,30 @@ def run(args: argparse.Namespace) -> int:
     if (out / "results.jsonl").exists() and not (out / MARKER).exists() and not args.force:
         raise PrscError(f"{out} holds a results.jsonl that prsc falsify did not write; "
                         "choose another output folder, or pass --force to replace it")
+    campaign = {"spec": str(source), "seed": args.seed, "method": args.method, "budget": args.budget, "rounds": args.rounds}
+    finished = finished_records(out, campaign) if args.resume else []
     (out / "scenes").mkdir(parents=True, exist_ok=True)
-    atomic_write(out / MARKER, json.dumps({"spec": str(source), "seed": args.seed, "method": args.method,
-                                           "budget": args.budget, "rounds": args.rounds}) + "\n")
+    atomic_write(out / MARKER, json.dumps(campaign) + "\n")
     console = Console(stderr=True)
     proposal = Proposal()
-    sampler = compile_sampler(str(source), args.include, law="sequential",
-                              proposal=proposal if args.method != "uniform" else None)
+    # An empty proposal draws exactly as the spec's (sequential) law does, recording where each
+    # draw fell (for the clusters).
+    sampler = compile_sampler(str(source), args.include, law="sequential", proposal=proposal)
     records: list[dict] = []
     masses: dict = {}
     start = 0
     for number, size in enumerate(round_sizes(args.budget, args.rounds)):
-        if args.method != "uniform":
-            sampler = compile_sampler(str(source), args.include, law="sequential", proposal=proposal)
+        if number and args.method != "uniform":
+            sampler = compile_sampler(str(source), args.include, law="sequential",
+                                      proposal=replace(proposal, strata=round_strata(args.seed, number, start, size)))
         scenes, info, seen = draw_round(sampler, args.seed, start, size)
         masses.update(seen)
+        if start + size <= len(finished):  # a finished round of the killed campaign: its draws rebuild the proposal
+            records += finished[start:start + size]
+            console.print(f"round {number}: {size} episodes kept from {out / 'results.jsonl'}")
+            start += size
+            proposal = next_proposal(args.method, proposal, masses, records)
+            continue
         check = getattr(controller, "check", None)
         if check is not None:
             for scene in scenes:
@@ -155,10 +204,7 @@ def run(args: argparse.Namespace) -> int:
         # Each round's records at once (whole file, atomically): a kill loses at most a round.
         atomic_write(out / "results.jsonl", "".join(json.dumps(r, separators=(", ", ": ")) + "\n" for r in records))
         start += size
-        if args.method != "uniform":
-            episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
-            step = cross_entropy_step if args.method == "cross-entropy" else failure_rate_step
-            proposal = step(proposal, masses, episodes)
+        proposal = next_proposal(args.method, proposal, masses, records)
     atomic_write(out / "proposal.json", json.dumps(proposal.to_json(), indent=1) + "\n")
     table = write_report(records, proposal, masses, out, f"{source.name}: falsify ({args.method}), "
                          f"budget {args.budget}, seed {args.seed}", declared)

@@ -114,8 +114,7 @@ def plot_sites(records: Sequence[dict], proposal: Any, masses: dict, path: Path,
     fig, axes = plt.subplots(1, max(len(sites), 1), figsize=(4 * max(len(sites), 1), 3.8), squeeze=False)
     for ax, site in zip(axes[0], sites):
         mass = np.asarray(masses[site], dtype=float)
-        w = np.asarray(proposal.weights.get(site, mass), dtype=float)
-        ratio = np.where(mass > 0, proposal.eps + (1 - proposal.eps) * w / np.where(mass > 0, mass, 1), 0.0)
+        ratio = proposal.site_density(site, mass)
         points = [(r["features"][site], r["outcome"] != "success") for r in records if site in r.get("features", {})]
         dims = len(points[0][0]) if points else 1
         if dims >= 2:

@@ -101,7 +101,7 @@ class SequentialSampler:
         """Scene `index` under `seed`; PrscError if it cannot be sampled within the limits."""
         ctx = SceneContext(scene_rng(seed, index))
         if self.proposal is not None and self.method == "exact":
-            ctx.proposal = self.proposal.scene_state()
+            ctx.proposal = self.proposal.scene_state(index)
         run = Attempt(ctx, RejectionStats(scenes=1), self.limits)
         attempts = self.limits.joint_attempts if self.joint else self.limits.scene_attempts
         tried = 0  # the work budget may end the attempts early: the message says how many ran
@@ -253,10 +253,9 @@ class SequentialSampler:
                 return self._blocked(rt, candidates, run)
             # The pieces are exactly the collision-free positions (the obstacles' interiors
             # are where the OBB test says "collides"): only requires can reject a draw.
-            if ctx.proposal is not None:
-                ctx.proposal.spec_position(rt.plan.name, rt.plan.index)
             for _ in range(self.limits.free_draws):
-                if self._accept(rt, obj, half, free.sample_one(rng), [], checks, run):
+                if self._accept(rt, obj, half, self._free_draw(rt, free, region, candidates, obj.rotation, half, run),
+                                [], checks, run):
                     return True
             return False
         for _ in range(self.limits.point_draws):
@@ -296,6 +295,14 @@ class SequentialSampler:
         if run.ctx.proposal is None:
             return region.draw(run.ctx.rng, self.method, self.walk_length)
         return run.ctx.proposal.position(rt.plan.name, rt.plan.index, region, run.ctx)
+
+    def _free_draw(self, rt: ObjectRuntime, free: UniformSampler, region: Prepared, candidates: list[PlacedBox],
+                   rotation: np.ndarray, half: np.ndarray, run: Attempt) -> np.ndarray:
+        """A position on the static free space: the spec's law, or the falsification proposal's (ratio recorded)."""
+        if run.ctx.proposal is None:
+            return free.sample_one(run.ctx.rng)
+        obstacles = obstacles_for(candidates, rotation, half)
+        return run.ctx.proposal.free_position(rt.plan.name, rt.plan.index, free, region, obstacles, run.ctx)
 
     def _all_static(self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox]) -> bool:
         """Whether the region and every candidate obstacle are the same objects in every scene."""

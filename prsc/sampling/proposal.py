@@ -1,39 +1,43 @@
 """A proposal law over a spec's random inputs that only reweights its feasible set.
 
-Each *site* (one object's position, one `(lo, hi)` range draw) gets a defensive mixture
+Every *site* (one object's position, one `(lo, hi)` range draw) is cut into cells: for a
+position, a grid over the bounding box of the object's feasible region *in the scene at
+hand* (cell c is the region cut by the grid box, prepared by the same exact sampler, so
+every draw is inside the region); for a range, equal bins of its unit interval. Cells live
+in the region's normalised coordinates, so "the corner of the tray" is the same cell
+wherever the tray went. The proposal is a defensive mixture over whole scenes,
 
-    q = eps * (the spec's law on the site) + (1 - eps) * sum_c w_c * uniform(cell c)
+    q = eps * p + (1 - eps) * sum_k share_k * q_k,
 
-where the cells partition the site's domain: for a position, a grid over the bounding box
-of the object's feasible region *in the scene at hand* (cell c is the region cut by the
-grid box, prepared by the same exact sampler, so every draw is inside the region); for a
-range, equal bins of its unit interval. Cells live in the region's normalised coordinates,
-so "the corner of the tray" is the same cell wherever the tray went. The density ratio of
-a draw is p/q = 1 / (eps + (1 - eps) w_c / f_c), f_c the spec's mass of cell c (its share
-of the region's measure), so the scene's importance weight under the *sequential* law
-(docs/sampling.md) is the product over its sites (docs/falsify.md says what it targets).
-A site without weights (every site of the initial proposal) draws exactly as the spec's law
-does, draw for draw, with ratio 1: round 0 of a campaign is the scenes `prsc sample` draws.
+each component q_k a product over sites of (spec_share * the spec's law + the rest on
+weighted cells). A scene's importance weight under the *sequential* law (docs/sampling.md)
+is p / q = 1 / (eps + (1 - eps) sum_k share_k prod_sites r_k), r_k the component's ratio
+at the draw's cell (Component.site_ratio): at most 1 / eps (docs/falsify.md). A proposal
+without components draws exactly as the spec's law does, draw for draw, with weight 1:
+round 0 of a campaign is the scenes `prsc sample` draws.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import GeometryError
+from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.sampler import UniformSampler, prepare_sampler
 
 FORMAT = "prsc-proposal/1"
-DEFAULT_EPS = 0.2  # defensive share of the spec's own law: every ratio <= 1 / eps per site
+DEFAULT_EPS = 0.1  # defensive share of the spec's own law: every scene's weight <= 1 / eps
+SITE_EPS = 0.2  # cross-entropy: each site's share of the spec's law (every site's ratio <= 1 / SITE_EPS)
 RANGE_BINS = 8
-GRID = {1: 8, 2: 4, 3: 3}  # cells per active axis of a position's region
+RANGE_MASS = np.full(RANGE_BINS, 1.0 / RANGE_BINS)
+GRID = {1: 8, 2: 8, 3: 4}  # cells per active axis of a position's region
 EXTENT = 1e-9  # metres: an axis of the region's box narrower than this is not gridded
 
 
@@ -50,7 +54,7 @@ class Cells:
 
     def cell_of(self, p: np.ndarray) -> int:
         """The index of the cell holding p (region coordinates)."""
-        return _flat(self.coords(p), self.k)
+        return grid_index(self.coords(p), self.k)
 
     def coords(self, p: np.ndarray) -> np.ndarray:
         """p in [0, 1] per gridded axis of the region's box."""
@@ -58,15 +62,17 @@ class Cells:
         return np.clip((p[self.axes] - self.lo[self.axes]) / span, 0.0, 1.0)
 
 
-def _flat(u: np.ndarray, k: int) -> int:
+def grid_index(u: np.ndarray, k: int) -> int:
+    """The flat index of the grid cell holding normalised coordinates u, k cells per axis."""
     index = 0
     for x in u:
         index = index * k + min(int(x * k), k - 1)
     return index
 
 
-def cut_into_cells(poly: Polytope, lo: np.ndarray, hi: np.ndarray, measure: float, dim: int) -> Cells | None:
-    """The region's grid cells, or None when it is a point (nothing to reweight)."""
+def cut_into_cells(piece_of: Callable[[Polytope], UniformSampler], lo: np.ndarray, hi: np.ndarray,
+                   measure: float, dim: int) -> Cells | None:
+    """The grid cells of a region (piece_of(box): the region cut by the box), or None when it is a point."""
     axes = np.nonzero(hi - lo > EXTENT)[0]
     if dim == 0 or not len(axes):
         return None
@@ -83,7 +89,7 @@ def cut_into_cells(poly: Polytope, lo: np.ndarray, hi: np.ndarray, measure: floa
             a_rows += [row, -row]
             b_rows += [lo[axis] + (digit + 1) * step, -(lo[axis] + digit * step)]
         try:
-            piece = prepare_sampler(intersect(poly, Polytope.from_rows(a_rows, b_rows)))
+            piece = piece_of(Polytope.from_rows(a_rows, b_rows))
         except GeometryError:
             piece = None
         if piece is not None and (piece.dim < dim or piece.measure <= 0.0):
@@ -94,18 +100,61 @@ def cut_into_cells(poly: Polytope, lo: np.ndarray, hi: np.ndarray, measure: floa
     return Cells(lo, hi, axes, k, samplers, shares / shares.sum())
 
 
-@dataclass
-class Proposal:
-    """Per site, the cell weights w (a site absent keeps the spec's law); eps the defensive share."""
+@dataclass(frozen=True)
+class Component:
+    """One product law over the sites: per site, `spec_share` of the spec's law, the rest on weighted cells."""
 
-    weights: dict[str, list[float]] = field(default_factory=dict)
+    share: float  # the component's share of the mixture
+    spec_share: float
+    cells: dict[str, dict[int, float]]  # site -> {cell: weight}; a site absent keeps the spec's law
+
+    def site_ratio(self, site: str, cell: int, mass: np.ndarray) -> float:
+        """This component's density over the spec's at a draw in `cell` of the site (masses `mass`)."""
+        weights = self.cells.get(site)
+        if weights is None or not mass[cell] > 0:
+            return 1.0
+        total = sum(w for c, w in weights.items() if c < len(mass) and mass[c] > 0)
+        if not total > 0:
+            return 1.0
+        return self.spec_share + (1 - self.spec_share) * weights.get(cell, 0.0) / total / mass[cell]
+
+    def to_json(self) -> dict[str, Any]:
+        """As DIR/proposal.json stores it."""
+        return {"share": self.share, "spec_share": self.spec_share,
+                "cells": {site: {str(c): w for c, w in sorted(cells.items())} for site, cells in self.cells.items()}}
+
+
+@dataclass(frozen=True)
+class Strata:
+    """A round's systematic choice of components: scene start + j takes the point (offset + j) / count.
+
+    Over the points, the spec's law and each component get count * share scenes up to one
+    (share: eps, or (1 - eps) share_k), so the mixture weight p / q keeps the estimate unbiased
+    while the groups' sizes no longer vary by chance (docs/falsify.md)."""
+
+    start: int
+    count: int
+    offset: float  # in [0, 1), one uniform draw per round
+
+    def point(self, index: int) -> float | None:
+        """Scene `index`'s point in [0, 1), or None when it is outside the strata."""
+        j = index - self.start
+        return (self.offset + j) / self.count if 0 <= j < self.count else None
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """eps of the spec's law plus a mixture of product components (none: the spec's law, draw for draw)."""
+
+    components: tuple[Component, ...] = ()
     eps: float = DEFAULT_EPS
     law: str = "sequential"
+    strata: Strata | None = None  # a campaign round's systematic component choice (not stored)
 
     def to_json(self) -> dict[str, Any]:
         """The proposal as DIR/proposal.json stores it."""
         return {"format": FORMAT, "law": self.law, "eps": self.eps, "range_bins": RANGE_BINS,
-                "grid": {str(k): v for k, v in GRID.items()}, "weights": self.weights}
+                "grid": {str(k): v for k, v in GRID.items()}, "components": [c.to_json() for c in self.components]}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Proposal:
@@ -113,17 +162,36 @@ class Proposal:
         if not isinstance(data, dict) or data.get("format") != FORMAT:
             raise PrscError(f"not a prsc proposal (expected \"format\": \"{FORMAT}\")")
         eps = float(data.get("eps", DEFAULT_EPS))
-        if not 0.0 < eps <= 1.0:
-            raise PrscError(f"a proposal's eps must be in (0, 1], got {eps}")
-        weights = {str(k): [float(x) for x in v] for k, v in data.get("weights", {}).items()}
-        for site, w in weights.items():
-            if any(x < 0 or not np.isfinite(x) for x in w) or not sum(w) > 0:
-                raise PrscError(f"proposal site {site}: weights must be >= 0, finite and not all 0")
-        return cls(weights, eps, str(data.get("law", "sequential")))
+        if not 0.0 <= eps <= 1.0:
+            raise PrscError(f"a proposal's eps must be in [0, 1], got {eps}")
+        components = []
+        for k, item in enumerate(data.get("components", [])):
+            try:
+                share, spec_share = float(item["share"]), float(item["spec_share"])
+                cells = {str(site): {int(c): float(w) for c, w in ws.items()} for site, ws in item["cells"].items()}
+            except (KeyError, TypeError, ValueError, AttributeError):
+                raise PrscError(f"proposal component {k}: expected share, spec_share and cells") from None
+            weights = [w for ws in cells.values() for w in ws.values()]
+            if not (share >= 0 and 0.0 <= spec_share <= 1.0) or any(w < 0 or not np.isfinite(w) for w in weights):
+                raise PrscError(f"proposal component {k}: share, spec_share and weights must be >= 0 and finite "
+                                "(spec_share <= 1)")
+            components.append(Component(share, spec_share, cells))
+        if components and not sum(c.share for c in components) > 0:
+            raise PrscError("a proposal's component shares must not all be 0")
+        return cls(tuple(components), eps, str(data.get("law", "sequential")))
 
-    def scene_state(self) -> ProposalState:
-        """The per-scene state a SceneContext carries while a scene is drawn."""
-        return ProposalState(self)
+    def site_density(self, site: str, mass: np.ndarray) -> np.ndarray:
+        """Per cell of a site, the proposal's marginal density over the spec's (1 where it keeps the spec's law)."""
+        if not self.components:
+            return np.where(mass > 0, 1.0, 0.0)
+        total = sum(c.share for c in self.components)
+        mixed = sum(c.share / total * np.array([c.site_ratio(site, k, mass) for k in range(len(mass))])
+                    for c in self.components)
+        return np.where(mass > 0, self.eps + (1 - self.eps) * mixed, 0.0)
+
+    def scene_state(self, index: int = -1) -> ProposalState:
+        """The per-scene state a SceneContext carries while scene `index` is drawn."""
+        return ProposalState(self, None if self.strata is None else self.strata.point(index))
 
 
 def load_proposal(path: str | Path) -> Proposal:
@@ -143,33 +211,50 @@ def load_proposal(path: str | Path) -> Proposal:
 _CELLS: dict[int, tuple[Any, Cells | None]] = {}  # id(prepared region) -> (region, its cells)
 
 
-def region_cells(region: Any) -> Cells | None:
-    """The cells of a prepared region (cut once per prepared region: static and anchored ones are reused)."""
-    hit = _CELLS.get(id(region))
-    if hit is not None and hit[0] is region:
+def _cached(owner: Any, cut: Callable[[], Cells | None]) -> Cells | None:
+    """The cells of `owner` (a prepared region or free space), cut once while it lives."""
+    hit = _CELLS.get(id(owner))
+    if hit is not None and hit[0] is owner:
         return hit[1]
     if len(_CELLS) > 4096:
         _CELLS.clear()
-    cells = None if region.point is not None else cut_into_cells(region.poly, region.lo, region.hi, region.measure, region.dim)
-    _CELLS[id(region)] = (region, cells)
+    cells = cut()
+    _CELLS[id(owner)] = (owner, cells)
     return cells
+
+
+def region_cells(region: Any) -> Cells | None:
+    """The cells of a prepared region (cut once per prepared region: static and anchored ones are reused)."""
+    return _cached(region, lambda: None if region.point is not None else cut_into_cells(
+        lambda box: prepare_sampler(intersect(region.poly, box)), region.lo, region.hi, region.measure, region.dim))
+
+
+def free_space_cells(free: UniformSampler, region: Any, obstacles: list[Polytope]) -> Cells | None:
+    """The cells of a static region minus static obstacles (each cell decomposed exactly)."""
+    lo, hi = free.bounds()
+    return _cached(free, lambda: cut_into_cells(
+        lambda box: free_space_sampler(intersect(region.poly, box), obstacles), lo, hi, free.measure, free.dim))
 
 
 @dataclass
 class Draw:
-    """One site's draw in a scene: its density ratio p/q and where it fell (normalised coordinates)."""
+    """One site's draw in a scene: where it fell (normalised coordinates), its cell and the cells' spec masses."""
 
-    ratio: float
     coords: list[float]
+    cell: int
+    mass: np.ndarray
 
 
 class ProposalState:
-    """The draws of one scene under a proposal: site -> Draw, forgotten on a backtrack."""
+    """The draws of one scene under a proposal: (site, level) -> Draw, forgotten on a backtrack."""
 
-    def __init__(self, proposal: Proposal) -> None:
+    def __init__(self, proposal: Proposal, point: float | None = None) -> None:
         self.proposal = proposal
+        self.point = point  # the scene's systematic point in [0, 1) (Strata), or None: drawn at random
         self.draws: dict[tuple[str, int], Draw] = {}
         self.masses: dict[str, np.ndarray] = {}  # per site, the spec's mass of each cell (for fitting)
+        self.component: Component | None = None
+        self.chosen = not proposal.components  # no components: every site keeps the spec's law
 
     def rollback(self, level: int) -> None:
         """Forget the draws made while placing objects >= level (SceneContext.rollback)."""
@@ -177,8 +262,14 @@ class ProposalState:
             del self.draws[key]
 
     def weight(self) -> float:
-        """The scene's importance weight: the product of its sites' ratios."""
-        return float(np.prod([d.ratio for d in self.draws.values()])) if self.draws else 1.0
+        """The scene's importance weight p / q: q / p = eps + (1 - eps) sum_k share_k prod_sites ratio_k."""
+        components = self.proposal.components
+        if not components:
+            return 1.0
+        total = sum(c.share for c in components)
+        mixed = sum(c.share / total * float(np.prod([c.site_ratio(site, d.cell, d.mass) for (site, _), d in self.draws.items()]))
+                    for c in components)
+        return 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * mixed)
 
     def features(self) -> dict[str, list[float]]:
         """Where each site's draw fell (normalised coordinates), by site."""
@@ -187,37 +278,50 @@ class ProposalState:
             out[f"{site}@{level}" if site in out else site] = draw.coords
         return out
 
-    def _pick(self, site: str, mass: np.ndarray, u: float, v: float) -> tuple[int | None, np.ndarray]:
-        """The cell to draw from (None: the spec's law) and the site's weights."""
-        w = self.proposal.weights.get(site)
-        weights = mass if w is None or len(w) != len(mass) else np.asarray(w, dtype=float) * (mass > 0)
-        total = weights.sum()
-        if not total > 0:
-            weights, total = mass, mass.sum()
-        weights = weights / total
-        if u < self.proposal.eps:
-            return None, weights
-        return min(int(np.searchsorted(np.cumsum(weights), v, side="right")), len(weights) - 1), weights
+    def _choose(self, ctx: Any) -> Component | None:
+        """The scene's component (drawn once, at its first site): None for the spec's law."""
+        if not self.chosen:
+            self.chosen = True
+            components, eps = self.proposal.components, self.proposal.eps
+            u = ctx.uniform() if self.point is None else self.point
+            if u >= eps:
+                shares = np.cumsum([c.share for c in components])
+                v = ctx.uniform() if self.point is None else (u - eps) / (1 - eps)
+                pick = int(np.searchsorted(shares, v * shares[-1], side="right"))
+                self.component = components[min(pick, len(components) - 1)]
+        return self.component
+
+    def _pick(self, site: str, mass: np.ndarray, ctx: Any) -> int | None:
+        """The cell the scene's component draws this site from (None: the spec's law)."""
+        component = self._choose(ctx)
+        weights = None if component is None else component.cells.get(site)
+        if not weights:
+            return None
+        cells = [c for c in weights if c < len(mass) and mass[c] > 0 and weights[c] > 0]
+        if not cells or ctx.uniform() < component.spec_share:  # type: ignore[union-attr]
+            return None
+        shares = np.cumsum([weights[c] for c in cells])
+        return cells[min(int(np.searchsorted(shares, ctx.uniform() * shares[-1], side="right")), len(cells) - 1)]
 
     def position(self, name: str, level: int, region: Any, ctx: Any) -> np.ndarray:
         """A position drawn from the proposal on the prepared region (region coordinates)."""
-        cells = region_cells(region)
-        if cells is None:
-            return region.draw(ctx.rng, "exact", 1)
-        site = f"position:{name}"
+        return self._cell_draw(f"position:{name}", level, region_cells(region), lambda: region.draw(ctx.rng, "exact", 1), ctx)
+
+    def free_position(self, name: str, level: int, free: UniformSampler, region: Any, obstacles: list[Polytope],
+                      ctx: Any) -> np.ndarray:
+        """A position drawn from the proposal on a static free space (region minus obstacles)."""
+        return self._cell_draw(f"position:{name}", level, free_space_cells(free, region, obstacles),
+                               lambda: free.sample_one(ctx.rng), ctx)
+
+    def _cell_draw(self, site: str, level: int, cells: Cells | None, spec_draw: Callable[[], np.ndarray],
+                   ctx: Any) -> np.ndarray:
+        """A point from the scene's component on the site's cells (spec_draw: one draw of the spec's law)."""
+        if cells is None:  # a point: nothing to reweight
+            return spec_draw()
         self.masses[site] = cells.mass
-        if site not in self.proposal.weights:  # the spec's law, draw for draw as without a proposal
-            p = region.draw(ctx.rng, "exact", 1)
-            self.draws[(site, level)] = Draw(1.0, [round(float(x), 6) for x in cells.coords(p)])
-            return p
-        cell, weights = self._pick(site, cells.mass, ctx.uniform(), ctx.uniform())
-        if cell is not None and cells.samplers[cell] is None:
-            cell = None  # rounding put the pick on an empty cell: fall back to the spec's law
-        p = region.draw(ctx.rng, "exact", 1) if cell is None else cells.samplers[cell].sample_one(ctx.rng)
-        at = cells.cell_of(p)
-        f = cells.mass[at]
-        ratio = 1.0 if f <= 0 else 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * weights[at] / f)
-        self.draws[(site, level)] = Draw(ratio, [round(float(x), 6) for x in cells.coords(p)])
+        cell = self._pick(site, cells.mass, ctx)
+        p = spec_draw() if cell is None or cells.samplers[cell] is None else cells.samplers[cell].sample_one(ctx.rng)  # type: ignore[union-attr]
+        self.draws[(site, level)] = Draw([round(float(x), 6) for x in cells.coords(p)], cells.cell_of(p), cells.mass)
         return p
 
     def spec_position(self, name: str, level: int) -> None:
@@ -226,71 +330,11 @@ class ProposalState:
 
     def unit(self, site: str, ctx: Any) -> float:
         """A draw on [0, 1) for a range at `site` (spec law: uniform)."""
-        mass = np.full(RANGE_BINS, 1.0 / RANGE_BINS)
         site = f"range:{site}"
-        self.masses[site] = mass
-        if site not in self.proposal.weights:  # the spec's law, draw for draw as without a proposal
-            u = ctx.uniform()
-            self.draws[(site, ctx.level)] = Draw(1.0, [round(u, 6)])
-            return u
-        cell, weights = self._pick(site, mass, ctx.uniform(), ctx.uniform())
-        x = ctx.uniform()
-        u = x if cell is None else (cell + x) / RANGE_BINS
-        at = min(int(u * RANGE_BINS), RANGE_BINS - 1)
-        ratio = 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * weights[at] / mass[at])
-        self.draws[(site, ctx.level)] = Draw(ratio, [round(u, 6)])
+        self.masses[site] = RANGE_MASS
+        cell = self._pick(site, RANGE_MASS, ctx)
+        u = ctx.uniform()
+        if cell is not None:
+            u = (cell + u) / RANGE_BINS
+        self.draws[(site, ctx.level)] = Draw([round(u, 6)], min(int(u * RANGE_BINS), RANGE_BINS - 1), RANGE_MASS)
         return u
-
-
-def cell_index(coords: list[float], cells: int) -> int:
-    """The cell of normalised coordinates on a grid of `cells` cells (cells per axis ** axes)."""
-    k = int(round(cells ** (1.0 / max(len(coords), 1))))
-    return _flat(np.asarray(coords, dtype=float), k)
-
-
-def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
-                       smoothing: float = 0.7) -> Proposal:
-    """One cross-entropy update toward the failures (elite set = the failed episodes).
-
-    Per site the maximiser of sum over failures of W log q is the failures' importance-weighted
-    share per cell; it is mixed with the current weights (`smoothing`, as VerifAI does) so no
-    cell of positive mass ever gets weight zero. `episodes`: (features, weight, failed)."""
-    weights = dict(proposal.weights)
-    for site, mass in masses.items():
-        old = np.asarray(weights.get(site, mass), dtype=float)
-        if len(old) != len(mass):
-            old = mass
-        target = np.zeros(len(mass))
-        for features, w, failed in episodes:
-            if failed and site in features:
-                target[cell_index(features[site], len(mass))] += w
-        target *= mass > 0
-        if not target.sum() > 0:
-            continue
-        new = smoothing * target / target.sum() + (1 - smoothing) * old / old.sum()
-        weights[site] = [round(float(x), 9) for x in new / new.sum()]
-    return Proposal(weights, proposal.eps, proposal.law)
-
-
-def failure_rate_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[tuple[dict, float, bool]],
-                      sharpness: float = 2.0) -> Proposal:
-    """Per site, weights proportional to each cell's spec mass times its failure rate to the power `sharpness`.
-
-    The rate of a cell is (failures + 1) / (episodes + 2) over every episode so far that drew in
-    it (a Beta(1, 1) prior: a cell never tried counts as even odds, so it is explored). Unlike
-    the cross-entropy step it follows where failures are *frequent*, not where their
-    weighted mass lies, and a site the outcome does not depend on keeps near-equal rates and
-    so stays near the spec's law."""
-    weights = dict(proposal.weights)
-    for site, mass in masses.items():
-        tried, failed = np.zeros(len(mass)), np.zeros(len(mass))
-        for features, _, fail in episodes:
-            if site in features:
-                cell = cell_index(features[site], len(mass))
-                tried[cell] += 1
-                failed[cell] += fail
-        if not failed.sum() > 0:
-            continue
-        new = mass * ((failed + 1) / (tried + 2)) ** sharpness
-        weights[site] = [round(float(x), 9) for x in new / new.sum()]
-    return Proposal(weights, proposal.eps, proposal.law)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import pytest
@@ -42,6 +43,18 @@ def test_falsify_writes_every_output_and_is_deterministic_under_jobs(tmp_path, c
     summary = (one / "summary.txt").read_text()
     assert "sequential law (weighted)" in summary and "distinct failure clusters" in summary
     assert "sequential law" in capsys.readouterr().out
+    # A campaign killed after round 0 resumes to the same episodes and proposal.
+    three = tmp_path / "three"
+    shutil.copytree(one, three)
+    lines = (three / "results.jsonl").read_text().splitlines(keepends=True)
+    (three / "results.jsonl").write_text("".join(lines[:4]))
+    (three / "proposal.json").unlink()
+    assert main(["falsify", *common, "-o", str(three), "--resume"]) == 0
+    assert "kept from" in capsys.readouterr().err
+    assert _records(three / "results.jsonl") == records
+    assert (three / "proposal.json").read_bytes() == (one / "proposal.json").read_bytes()
+    assert main(["falsify", *common, "--seed", "12", "-o", str(three), "--resume"]) == 2
+    assert "another campaign" in capsys.readouterr().err
 
 
 def test_uniform_method_draws_the_scenes_prsc_sample_draws(tmp_path, capsys):
@@ -55,7 +68,9 @@ def test_uniform_method_draws_the_scenes_prsc_sample_draws(tmp_path, capsys):
 
 
 def test_sample_and_run_draw_from_a_learnt_proposal(tmp_path, capsys):
-    proposal = {"format": "prsc-proposal/1", "eps": 0.05, "weights": {"position:c1": [0.0] * 15 + [1.0]}}
+    corner = {str(8 * column + row): 1.0 for column in (6, 7) for row in (5, 6, 7)}  # x > 0.75, y > 0.625 of the tray
+    proposal = {"format": "prsc-proposal/1", "eps": 0.05,
+                "components": [{"share": 1.0, "spec_share": 0.0, "cells": {"position:c1": corner}}]}
     path = tmp_path / "proposal.json"
     path.write_text(json.dumps(proposal))
     assert main(["sample", str(SPEC), "-n", "40", "--proposal", str(path), "-o", str(tmp_path / "s.jsonl")]) == 0
@@ -63,7 +78,7 @@ def test_sample_and_run_draw_from_a_learnt_proposal(tmp_path, capsys):
     assert not check_scenes(compile_program(SPEC), scenes)
     from tests.data.corner_controller import in_corner
 
-    assert sum(map(in_corner, scenes)) >= 25  # the corner cell carries 95 % of the cube's draws
+    assert sum(map(in_corner, scenes)) >= 25  # the corner cells carry 95 % of the cube's draws
     assert main(["run", str(SPEC), "-n", "2", "--proposal", str(path), "--controller", CORNER,
                  "-o", str(tmp_path / "run")]) == 0
     assert len(_records(tmp_path / "run" / "results.jsonl")) == 2

@@ -4,17 +4,19 @@ fails, and their importance weights give the failure probability under the spec'
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from prsc.commands.falsify import draw_round
+from prsc.commands.falsify import draw_round, round_strata
 from prsc.commands.falsify_report import failure_clusters, weighted_estimate
 from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import compile_sampler
-from prsc.sampling.proposal import Proposal, cross_entropy_step, failure_rate_step
+from prsc.sampling.proposal import Component, Proposal, Strata
+from prsc.sampling.proposal_search import cross_entropy_step, failure_tree_step
 from tests.data.corner_controller import in_corner
 from tests.sampling.scene_checks import check_scenes
 
@@ -23,10 +25,10 @@ SEED = 3
 
 
 def _rounds(rounds: int, size: int, step=cross_entropy_step) -> tuple[list[dict], list[Proposal], list[dict]]:
-    """Rounds of `step` against the corner controller: (records, proposals used, scenes)."""
+    """Rounds of `step` against the corner controller, as prsc falsify runs them: (records, proposals used, scenes)."""
     proposal, records, used, scenes, masses = Proposal(), [], [], [], {}
     for number in range(rounds):
-        sampler = compile_sampler(str(SPEC), proposal=proposal)
+        sampler = compile_sampler(str(SPEC), proposal=replace(proposal, strata=round_strata(SEED, number, number * size, size)))
         drawn, info, seen = draw_round(sampler, SEED, number * size, size)
         masses.update(seen)
         used.append(proposal)
@@ -48,7 +50,7 @@ def corner_probability() -> tuple[float, float]:
     return p, math.sqrt(p * (1 - p) / len(hits))
 
 
-@pytest.fixture(scope="module", params=[cross_entropy_step, failure_rate_step], ids=["cross-entropy", "failure-rate"])
+@pytest.fixture(scope="module", params=[cross_entropy_step, failure_tree_step], ids=["cross-entropy", "failure-tree"])
 def campaign(request):
     return _rounds(6, 100, request.param)
 
@@ -69,8 +71,10 @@ def test_proposal_concentrates_on_the_corner_within_a_few_rounds(campaign, corne
     # Round 0 is the spec's law; by round 3 most scenes put the cube in the corner.
     assert by_round[0] < 3 * p
     assert by_round[3] > 0.5 and by_round[-1] > 0.5, by_round
-    weights = np.asarray(used[-1].weights["position:c1"])
-    assert weights.max() > 0.4  # one cell of 16 carries it
+    mass = np.full(64, 1 / 64)  # the tray's inside is a rectangle: its 8 x 8 cells weigh the same
+    density = used[-1].site_density("position:c1", mass)
+    column, row = divmod(int(np.argmax(density)), 8)
+    assert column >= 6 and row >= 5 and density.max() > 4, density  # the +x +y corner: x > 0.755, y > 0.6
 
 
 def test_every_proposed_scene_satisfies_the_spec(campaign):
@@ -93,6 +97,20 @@ def test_weighted_estimate_converges_to_the_corner_probability(campaign, corner_
     assert abs(raw - p) > 5 * tolerance, (raw, p, tolerance)
 
 
+def test_a_round_gives_each_component_its_share_of_scenes_up_to_one():
+    # Systematic choice: of 50 scenes, eps = 0.1 of them keep the spec's law and the components
+    # (shares 0.3 and 0.7 of the rest) take 13.5 and 31.5, up to one, whatever the offset.
+    left = Component(0.3, 0.0, {"position:c1": {0: 1.0}})
+    right = Component(0.7, 0.0, {"position:c1": {63: 1.0}})
+    for offset in (0.0, 0.37, 0.99):
+        proposal = Proposal((left, right), 0.1, strata=Strata(100, 50, offset))
+        sampler = compile_sampler(str(SPEC), proposal=proposal)
+        picked = [sampler.sample(SEED, k).context.proposal.component for k in range(100, 150)]
+        counts = [sum(c is None for c in picked), sum(c is left for c in picked), sum(c is right for c in picked)]
+        assert counts[0] in (5, 6) and counts[1] in (13, 14) and counts[2] in (31, 32), (offset, counts)
+        assert sum(counts) == 50
+
+
 def test_failure_clusters_count_near_duplicates_once():
     base = {"outcome": "corner", "weight": 1.0}
     records = [{**base, "index": 0, "features": {"a": [0.1, 0.1]}}, {**base, "index": 1, "features": {"a": [0.15, 0.12]}},
@@ -103,8 +121,18 @@ def test_failure_clusters_count_near_duplicates_once():
 
 
 def test_a_bad_proposal_file_is_a_clear_error(tmp_path):
-    bad = {"format": "prsc-proposal/1", "weights": {"position:c1": [-1, 2]}}
-    with pytest.raises(PrscError, match="weights must be >= 0"):
+    bad = {"format": "prsc-proposal/1", "components": [{"share": 1, "spec_share": 0, "cells": {"position:c1": {"3": -1}}}]}
+    with pytest.raises(PrscError, match="must be >= 0"):
         Proposal.from_json(bad)
     with pytest.raises(PrscError, match="not a prsc proposal"):
         Proposal.from_json({"weights": {}})
+
+
+def test_importance_weights_average_one_under_a_learnt_proposal(campaign):
+    # E_q[p / q] = 1 for any proposal: the trays (cells of the free space left by the robots),
+    # the cube and the camera's ranges are all reweighted, and the ratios must account for it.
+    _, used, _ = campaign
+    _, info, _ = draw_round(compile_sampler(str(SPEC), proposal=used[-1]), SEED + 1, 0, 400)
+    w = np.array([i["weight"] for i in info])
+    assert {"position:tr_1", "position:c1"} <= set(info[0]["features"])
+    assert w.std() > 0.3 and abs(w.mean() - 1.0) < 4 * w.std() / math.sqrt(len(w)), (w.mean(), w.std())
