@@ -144,7 +144,8 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
     if isinstance(spec, nodes.VisibleSpec):
         camera = r(spec.camera)
         if camera.type not in (T.OBJECT, T.ANY):
-            raise PrscError(f"`visible from` needs a camera object, not {article(camera.type)}", camera.span)
+            phrase = "not visible from" if spec.negated else "visible from"
+            raise PrscError(f"`{phrase}` needs a camera object, not {article(camera.type)}", camera.span)
         return ir.VisibleFrom(span, POSITION, BOX_READS, camera, outside=spec.negated)
     raise PrscError("unknown specifier", span)  # pragma: no cover
 
