@@ -10,6 +10,7 @@ minus the in-view set; the same test rejects laws that ignore the exclusion or e
 from __future__ import annotations
 
 import functools
+import re
 from pathlib import Path
 
 import numpy as np
@@ -104,6 +105,15 @@ def test_explain_prints_the_cell_and_the_measure_left(tmp_path, capsys):
     table = (1.2 - 2 * CUBE_HALF[0]) * (0.8 - 2 * CUBE_HALF[1])
     points = _uniform_on_table(np.random.default_rng(2), 200_000, CUBE_HALF)
     assert abs(left - table * (~_inside_view(points, CUBE_HALF)).mean()) < 0.01 * table
+
+
+def test_the_guides_example_samples_and_every_scene_checks(tmp_path):
+    # The cube is placed after the cup: the cup's obstacle and the in-view cell are cut together.
+    blocks = re.findall(r"```prs\n(.*?)```", (SPECS.parent / "docs" / "language.md").read_text(), re.S)
+    program = _program(tmp_path, next(b for b in blocks if "not visible from camera" in b))
+    sampler = Sampler(program, "exact")
+    report = check_scenes(program, [sampler.scene(4, i) for i in range(50)])
+    assert not report and report.checked > 0, report
 
 
 HEAD = SPEC.split("c = ")[0]
