@@ -173,7 +173,7 @@ class SequentialSampler:
         names = set(plan.depends_on)
         if plan.region.anchor is not None:
             names.add(plan.region.anchor)
-        for label_id in [r.label_id for r in plan.region.rules] + [c.label_id for c in plan.checks]:
+        for label_id in [r.label_id for r in plan.region.rules + plan.exclusions] + [c.label_id for c in plan.checks]:
             names.update(self.cprog.labels[label_id].refs)
         return {self._index[n] for n in names if n in self._index}
 

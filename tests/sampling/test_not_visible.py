@@ -141,3 +141,19 @@ def test_a_region_wholly_in_view_is_a_dead_end_that_names_the_exclusion(tmp_path
         Sampler(_program(tmp_path, text), "exact").scene(0, 0)
     assert caught.value.span.line == 4
     assert any(note.startswith("excluded by not visible from camera") for note, _ in caught.value.notes)
+
+
+def test_a_camera_that_may_see_the_whole_region_is_redrawn(tmp_path):
+    # With the camera above the small table (|x| < ~0.7) every box on it is wholly in view:
+    # a dead end that only re-placing the camera resolves.
+    text = ("from tabletop import *\n"
+            "table = Table on Vector3D(0, 0, 0), with width 0.4, with length 0.4, with height 0.75\n"
+            "camera = Camera at Vector3D(Range(-1.5, 1.5), 0, 2), with orientation Vector3D(0, 0, -90 deg)\n"
+            "c = Cube completely on table, with width 0.08, not visible from camera\n")
+    program = _program(tmp_path, text)
+    sampler = Sampler(program, "exact")
+    scenes = [sampler.scene(0, i) for i in range(60)]
+    report = check_scenes(program, scenes)
+    assert not report and report.checked > 0, report
+    xs = [next(o for o in s["objects"] if o["name"] == "camera")["position"][0] for s in scenes]
+    assert min(abs(x) for x in xs) > 0.6
