@@ -241,8 +241,8 @@ class SequentialSampler:
             obj.position = p if shift is None else p + shift
             rt.late_rotation(obj, ctx)
             return True
-        static = shift is None and not rt.after_position and rt.static_exclusions and self._all_static(rt, region, candidates)
-        if (candidates or excluded) and method == "exact" and static:
+        if (candidates or excluded) and shift is None and not rt.after_position and method == "exact" \
+                and rt.static_exclusions and self._all_static(rt, region, candidates):
             # Region and obstacles are the same every scene: decompose the free space once.
             free = self._static_free_space(rt, region, candidates, obj.rotation, half, excluded)  # type: ignore[arg-type]
             if free is None:
@@ -379,9 +379,10 @@ class SequentialSampler:
             return PrscError(f"{head}: its region was empty ({inner.message.split(': ', 1)[-1]})", span, inner.notes)
         if failure.kind == "blocked":
             notes = tuple((f"blocked by {q.name}", self.runtimes[q.index].plan.span) for q in failure.blockers)
-            plan = self.runtimes[failure.index].plan
-            notes += tuple((f"excluded by {labels[r.label_id].text}", r.span) for r in plan.exclusions)
-            return PrscError(f"{head}: no free position (every position collides or is excluded)", span, notes)
+            exclusions = self.runtimes[failure.index].plan.exclusions
+            notes += tuple((f"excluded by {labels[r.label_id].text}", r.span) for r in exclusions)
+            why = "every position collides or is excluded" if exclusions else "every position collides"
+            return PrscError(f"{head}: no free position ({why})", span, notes)
         if failure.kind == "require" and failure.label >= 0:
             lab = labels[failure.label]
             return PrscError(f"{head}: a require never held", span, ((f"this require: {lab.text}", lab.span),))

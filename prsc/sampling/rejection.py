@@ -3,9 +3,9 @@
 Each object's position is drawn uniformly from its base region: the workspace's bounding
 box, cut by its equalities (`at`, `aligned with`, ...) and, for `on X`, X's surface (as
 the original sampled `on`). Every other relation is a test on that draw: containment
-(`completely`, `in`, the workspace, `[not] visible from`), relative position (`left of`, ...), collisions with
-the objects before it, and every `require` (none is lowered here). The first failed test
-rejects the whole scene, counted by cause as in the paper's Table II.
+(`completely`, `in`, the workspace, `[not] visible from`), relative position (`left of`,
+...), collisions with the objects before it, and every `require` (none is lowered here).
+The first failed test rejects the whole scene, counted by cause as in the paper's Table II.
 """
 
 from __future__ import annotations
