@@ -5,7 +5,8 @@ line with its line:col. --stage ir: the typed IR (names resolved, evaluation ord
 --stage constraints (default): the evaluation order, then per object its rows
 `a . p <= b` / `a . p = b` on its centre p, each with the specifier and source line that
 produced it, the region's dimension and length/area/volume, how it is cached, and the
-requires checked by rejection. Rows that depend on random values are shown as drawn in
+requires checked by rejection, and the cells its centre stays out of (`not visible from C`)
+with the measure left. Rows that depend on random values are shown as drawn in
 scene --index of --seed. --stage scene: scene --index of --seed as scene JSON, indented
 (the same scene `prsc sample` writes on one line).
 
@@ -90,6 +91,7 @@ def describe_rows(poly: Any, labels: Any) -> list[str]:
 def explain_constraints(sampler: Any, seed: int, index: int) -> str:
     """The constraint-stage report for one compiled sampler."""
     from prsc.geometry.exceptions import GeometryError
+    from prsc.geometry.free_space import free_space
     from prsc.sampling.regions import prepare
 
     cprog = sampler.constraints
@@ -137,6 +139,17 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
                 out.append(f"  feasible region: dimension {dim}, {measure}")
             except GeometryError as error:
                 out.append(f"  feasible region: {error}")
+        if rt is not None and plan.exclusions:
+            out.append("  minus the cells (the centre stays out of each):")
+            cells = rt.excluded(ctx, support)
+            for cell in cells:
+                out.extend(describe_rows(cell, labels))
+            try:
+                left = free_space(poly, cells)
+                out.append(f"  feasible region minus the cells: {_MEASURE[left.region.dim]} {left.measure:.6g}"
+                           f"{_UNITS[left.region.dim]} in {len(left.pieces)} convex pieces")
+            except GeometryError as error:
+                out.append(f"  feasible region minus the cells: {error}")
         for check in plan.checks:
             lab = labels[check.label_id]
             out.append(f"  checked by rejection: {lab.text}  [{_where(lab.span)}]")

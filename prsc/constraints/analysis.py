@@ -32,6 +32,7 @@ LOCATED_ARGS = {
     "reachable": (0,),
     "stably": tuple(range(64)),  # the support and every support under it
     "visible": (0,),
+    "not visible": (0,),
     "in": (),
     "workspace": (),
     "require": (),

@@ -35,6 +35,8 @@ BUILDERS: dict[str, Builder] = {
                                        bool(r.option("inside"))),
     "stably": lambda r, v, s: rows_stably(v, r.option("mass") or DENSITY * 8 * float(np.prod(s.half)), s, r.label_id, r.span),
     "visible": lambda r, v, s: rows_visible(v[0], s, r.label_id, r.span),
+    # The excluded cell (ObjectPlan.exclusions): the centres where the box is wholly in view.
+    "not visible": lambda r, v, s: rows_visible(v[0], s, r.label_id, r.span, "not visible from"),
     "direction": lambda r, v, s: rows.rows_direction(r.option("relation"), v[0], v[1] if len(v) > 1 else None, s, r.label_id, r.span,
                                                      v[2] if len(v) > 2 else None),
     "aligned": lambda r, v, s: rows.rows_aligned(v[0], r.option("axis"), r.label_id, r.span),
@@ -64,3 +66,8 @@ def rule_rows(rule: Rule, ctx: SceneContext, support: Support) -> Polytope:
     if rule.static:
         return rule.template.rows  # type: ignore[union-attr]
     return BUILDERS[rule.kind](rule, [f(ctx) for f in rule.values], support)
+
+
+def excluded_cells(rules: tuple[Rule, ...], ctx: SceneContext, support: Support) -> list[Polytope]:
+    """The convex cells an object's centre must stay out of in one scene (ObjectPlan.exclusions)."""
+    return [rule_rows(rule, ctx, support) for rule in rules]

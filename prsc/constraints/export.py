@@ -75,6 +75,10 @@ def constraint_ir(cprog: ConstraintProgram) -> dict[str, Any]:
             entry["rotation"] = None if rule.static_value is None else rule.static_value.tolist()
             rules.append(entry)
         rules.extend(_position(rule, labels[rule.label_id]) for rule in plan.rules)
+        for rule in plan.exclusions:  # rows of a cell the centre stays out of
+            entry = _position(rule, labels[rule.label_id])
+            entry["sets"] = "position (excluded cell)"
+            rules.append(entry)
         for check in plan.checks:
             entry = _entry(labels[check.label_id], "require", "test")
             entry["soft"] = check.soft

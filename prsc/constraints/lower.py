@@ -18,18 +18,26 @@ from prsc.constraints.analysis import pinned_point, region_rules
 from prsc.constraints.containers import containers_rested_in
 from prsc.constraints.diagnostics import explain_empty, numeric_failure
 from prsc.constraints.evaluate import Fn
-from prsc.constraints.model import REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
+from prsc.constraints.model import EXCLUSION_KINDS, REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.position import specifier_rule, workspace_rule
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
 from prsc.constraints.values import DIMENSIONS, ObjectValue, RegionValue, dimension, static_dims
+from prsc.errors import PrscError
 from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import is_feasible
 from prsc.geometry.lp import solve_lp
 from prsc.geometry.polytope import Polytope
 from prsc.ir.program import ObjectDecl, Program
+
+
+# Why an excluded cell needs the rotation first: with the rotation decided after the position
+# the cell could only be bounded, and subtracting a bound either keeps boxes wholly in view
+# or drops positions that are not (docs/language.md, "`visible from C`").
+_ROTATION_FIRST = ("`not visible from C` needs {name}'s rotation before its position, and `facing toward` "
+                   "sets it after: give a yaw instead, e.g. `facing (0, 360 deg)`")
 
 
 def _bounding_box(poly: Polytope) -> Polytope | None:
@@ -87,9 +95,14 @@ def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) ->
 
     rests_in = containers_rested_in(low, obj)  # first: it refuses a container interior that varies
     rules: list[Rule] = []
+    exclusions: list[Rule] = []
     for spec in obj.specifiers:
         rule = specifier_rule(low, obj, spec, support, me)
-        if rule is not None:
+        if rule is not None and rule.kind in EXCLUSION_KINDS:
+            if after:
+                raise PrscError(_ROTATION_FIRST.format(name=name), spec.span)
+            exclusions.append(rule)
+        elif rule is not None:
             rules.append(rule)
     if low.program.workspace is not None:
         rules.append(workspace_rule(low, obj, low.program.workspace, support, me))
@@ -130,6 +143,7 @@ def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) ->
         static_position=static_position,
         static_support=support,
         rests_in=rests_in,
+        exclusions=tuple(exclusions),
     )
 
 

@@ -33,6 +33,9 @@ POSITION = "position"
 DEAD_END = "dead end"
 CAUSES = (COLLISION, RELATIVE, CONTAINMENT, REQUIRE)
 
+# Rule kinds whose rows are a cell the centre must stay out of (ObjectPlan.exclusions).
+EXCLUSION_KINDS = frozenset({"not visible"})
+
 Evaluator = Callable[[SceneContext], Any]
 
 
@@ -120,7 +123,7 @@ class RequireCheck:
 
 @dataclass(frozen=True)
 class RegionRules:
-    """The rules whose intersection is an object's region, pre-digested for caching.
+    """The rules whose intersection is an object's region (before exclusions), pre-digested for caching.
 
     `static_rows`: the static rules stacked (None if none). `anchor` / `anchored_rows`:
     when every other rule has a template anchored at the same earlier object, their
@@ -162,6 +165,9 @@ class ObjectPlan:
     static_support: Support | None = None
     # Containers this object rests inside (`on X`, X declaring an interior): not collision obstacles.
     rests_in: tuple[int, ...] = ()
+    # Rules whose rows are a convex set the centre must stay out of (`not visible from C`): the
+    # object's feasible set is its region minus their union. Samplers subtract them as obstacles.
+    exclusions: tuple[Rule, ...] = ()
 
     @property
     def rules(self) -> tuple[Rule, ...]:

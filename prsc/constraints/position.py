@@ -45,7 +45,7 @@ def _kind_args_options(spec: ir.Specifier) -> tuple[str, tuple[ir.Expr, ...], tu
     if isinstance(spec, ir.StablyOn):
         return "stably", (spec.target,), ()
     if isinstance(spec, ir.VisibleFrom):
-        return "visible", (spec.camera,), ()
+        return ("not visible" if spec.outside else "visible"), (spec.camera,), ()
     if isinstance(spec, ir.Direction):
         if spec.relation not in rows.DIRECTION_AXES:
             raise PrscError(f"unknown direction {spec.relation!r}", spec.span)

@@ -2,6 +2,8 @@
 
 A box lies in a convex polytope exactly when every row holds at the box's support point:
 a . p + s(a) <= b (the same erosion as `completely in`). docs/language.md, "`visible from C`".
+`not visible from C` is the complement: these rows are then a cell the sampler subtracts from
+the object's region (ObjectPlan.exclusions), exactly, by free-space decomposition.
 """
 
 from __future__ import annotations
@@ -45,12 +47,15 @@ def camera_frustum(camera: ObjectValue, span: Span | None) -> Frustum:
     return frustum(near, far, fovy, (float(resolution[0]), float(resolution[1])))
 
 
-def rows_visible(camera: Any, support: Support, label: int, span: Span | None) -> Polytope:
-    """`visible from C`: a . p <= b - s(a) for each of the frustum's six planes."""
+def rows_visible(camera: Any, support: Support, label: int, span: Span | None, phrase: str = "visible from") -> Polytope:
+    """`visible from C`: a . p <= b - s(a) for each of the frustum's six planes.
+
+    For `not visible from C` (`phrase`) the same rows are the cell the centre must stay out of.
+    """
     if not isinstance(camera, ObjectValue):
-        raise PrscError("'visible from' needs a camera object", span)
+        raise PrscError(f"'{phrase}' needs a camera object", span)
     if not (camera.props.get("camera") or model_of(camera.props, camera.class_name) == "camera"):
-        raise PrscError(f"'visible from' needs a camera (a class with `camera: True`, as tabletop's Camera), "
+        raise PrscError(f"'{phrase}' needs a camera (a class with `camera: True`, as tabletop's Camera), "
                         f"and {camera.name} is a {camera.class_name}", span)
     if camera.position is None or camera.rotation is None:
         raise PrscError(f"{camera.name} is not placed yet here", span)

@@ -118,7 +118,7 @@ def format_specifier(spec: ir.Specifier) -> str:
     if isinstance(spec, ir.StablyOn):
         return f"stably on {_arg(spec.target)}"
     if isinstance(spec, ir.VisibleFrom):
-        return f"visible from {_arg(spec.camera)}"
+        return f"{'not ' if spec.outside else ''}visible from {_arg(spec.camera)}"
     if isinstance(spec, ir.Direction):
         word = DIRECTION_PHRASES.get(spec.relation, spec.relation)
         by = f" by {_arg(spec.by)}" if spec.by is not None else ""

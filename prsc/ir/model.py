@@ -313,6 +313,8 @@ class StablyOn(Specifier):
 
 @dataclass(frozen=True)
 class VisibleFrom(Specifier):
-    """`visible from C`: the box inside camera C's view frustum (docs/language.md)."""
+    """`visible from C`: the box inside camera C's view frustum; `outside` (written `not visible
+    from C`): the box not wholly inside it (docs/language.md)."""
 
     camera: Expr
+    outside: bool = field(default=False, kw_only=True)

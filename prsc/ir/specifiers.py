@@ -142,14 +142,11 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
             raise PrscError(f"`stably on` needs an object or a planar region, not {article(target.type)}", target.span)
         return ir.StablyOn(span, POSITION, BOX_READS, target)
     if isinstance(spec, nodes.VisibleSpec):
-        if spec.negated:
-            raise PrscError("`not visible from C` is not supported: the outside of a view frustum is a union "
-                            "of half-spaces, not a convex set, so prsc cannot sample it exactly. Place the "
-                            "object by a side instead, e.g. `behind C` or `left of C by d`", span)
         camera = r(spec.camera)
         if camera.type not in (T.OBJECT, T.ANY):
-            raise PrscError(f"`visible from` needs a camera object, not {article(camera.type)}", camera.span)
-        return ir.VisibleFrom(span, POSITION, BOX_READS, camera)
+            phrase = "not visible from" if spec.negated else "visible from"
+            raise PrscError(f"`{phrase}` needs a camera object, not {article(camera.type)}", camera.span)
+        return ir.VisibleFrom(span, POSITION, BOX_READS, camera, outside=spec.negated)
     raise PrscError("unknown specifier", span)  # pragma: no cover
 
 

@@ -7,7 +7,9 @@ rejection-checked require, the first draw is accepted. Otherwise draws are rejec
 against the candidates (exact OBB test); if acceptance stays low the region minus the
 candidates' Minkowski obstacles is decomposed exactly into convex pieces (an empty
 decomposition proves a dead end). Rejection within one object keeps its draw exactly
-uniform on the free part of its region.
+uniform on the free part of its region. Cells the centre must stay out of (`not visible
+from C`: ObjectPlan.exclusions) are obstacles too; the exact method always decomposes them
+away (no rejection), hit-and-run rejects draws inside them.
 
 A dead end (empty region, or no free position) retries the object's own random values a
 few times, then backtracks to the latest earlier object it depends on or collided with,
@@ -25,24 +27,25 @@ with `on`; see docs.)
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from prsc.constraints.context import SceneContext
 from prsc.constraints.diagnostics import explain_empty, numeric_failure
-from prsc.constraints.model import COLLISION, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
+from prsc.constraints.model import COLLISION, CONTAINMENT, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.geometry.free_space import free_space_sampler
+from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
 from prsc.sampling.attempt import Attempt, Failure, Limits
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
 from prsc.sampling.gibbs import GibbsSweeps
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.regions import Prepared
-from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params
+from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params, inside_any
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
 
@@ -179,7 +182,7 @@ class SequentialSampler:
         names = set(plan.depends_on)
         if plan.region.anchor is not None:
             names.add(plan.region.anchor)
-        for label_id in [r.label_id for r in plan.region.rules] + [c.label_id for c in plan.checks]:
+        for label_id in [r.label_id for r in plan.region.rules + plan.exclusions] + [c.label_id for c in plan.checks]:
             names.update(self.cprog.labels[label_id].refs)
         return {self._index[n] for n in names if n in self._index}
 
@@ -209,7 +212,7 @@ class SequentialSampler:
                 raise PrscError(
                     f"the region of {rt.plan.name} is unbounded: add a workspace or a bounding specifier", rt.plan.span
                 ) from error
-            if self._draw(rt, obj, half, region, shift, run):
+            if self._draw(rt, obj, half, region, shift, rt.excluded(ctx, support), run):
                 rt.finish(obj, ctx)
                 run.placed.append(rt.placed_box(obj, half, ctx))
                 return True
@@ -225,9 +228,10 @@ class SequentialSampler:
         return False
 
     def _draw(
-        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared, shift: np.ndarray | None, run: Attempt,
+        self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared, shift: np.ndarray | None,
+        excluded: list[Polytope], run: Attempt,
     ) -> bool:
-        """Draw the object's position (and late rotation); True when accepted."""
+        """Draw the object's position (and late rotation) outside the `excluded` cells; True when accepted."""
         ctx = run.ctx
         rng = ctx.rng
         method = self.method
@@ -241,14 +245,15 @@ class SequentialSampler:
             lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
             candidates = near(run.placed, lo, hi, reach, containers=rt.plan.rests_in)
         checks = () if self.joint else tuple(c for c in rt.plan.checks if c.soft is None or c.soft in ctx.active_requires)
-        if not candidates and not checks:
+        if not candidates and not checks and not excluded:
             p = self._region_draw(rt, region, run)
             obj.position = p if shift is None else p + shift
             rt.late_rotation(obj, ctx)
             return True
-        if candidates and shift is None and not rt.after_position and method == "exact" and self._all_static(rt, region, candidates):
+        if (candidates or excluded) and shift is None and not rt.after_position and method == "exact" \
+                and rt.static_exclusions and self._all_static(rt, region, candidates):
             # Region and obstacles are the same every scene: decompose the free space once.
-            free = self._static_free_space(rt, region, candidates, obj.rotation, half)  # type: ignore[arg-type]
+            free = self._static_free_space(rt, region, candidates, obj.rotation, half, excluded)  # type: ignore[arg-type]
             if free is None:
                 return self._blocked(rt, candidates, run)
             # The pieces are exactly the collision-free positions (the obstacles' interiors
@@ -258,14 +263,16 @@ class SequentialSampler:
                                 [], checks, run):
                     return True
             return False
-        for _ in range(self.limits.point_draws):
+        # The exact method never draws inside an excluded cell: it decomposes them away below.
+        rejection_draws = 0 if excluded and method == "exact" else self.limits.point_draws
+        for _ in range(rejection_draws):
             run.draws += 1
             if run.draws > self.limits.draw_budget:
                 return False
             p = self._region_draw(rt, region, run)
-            if self._accept(rt, obj, half, p if shift is None else p + shift, candidates, checks, run):
+            if self._accept(rt, obj, half, p if shift is None else p + shift, candidates, checks, run, excluded):
                 return True
-        if not candidates or method != "exact":
+        if not (candidates or excluded) or method != "exact":
             return False
         # Low acceptance against the placed boxes: decompose the free space exactly. With a
         # rotation still unknown (`facing toward`), subtract what collides for every yaw
@@ -279,7 +286,7 @@ class SequentialSampler:
         else:
             rotation, obstacle_half = obj.rotation, half
         try:
-            free = free_space_sampler(poly, obstacles_for(candidates, rotation, obstacle_half))  # type: ignore[arg-type]
+            free = free_space_sampler(poly, obstacles_for(candidates, rotation, obstacle_half) + excluded)  # type: ignore[arg-type]
         except EmptyRegionError:
             return self._blocked(rt, candidates, run)
         if ctx.proposal is not None:
@@ -311,13 +318,15 @@ class SequentialSampler:
         )
 
     def _static_free_space(
-        self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox], rotation: np.ndarray, half: np.ndarray
+        self, rt: ObjectRuntime, region: Prepared, candidates: list[PlacedBox], rotation: np.ndarray, half: np.ndarray,
+        excluded: list[Polytope],
     ) -> UniformSampler | None:
-        """Exact sampler of the static region minus static obstacles (cached); None if nothing is free."""
+        """Exact sampler of the static region minus static obstacles and excluded cells (cached); None if nothing is free."""
         key = (rt.plan.index, tuple(q.index for q in candidates))
         if key not in self._free_cache:
             try:
-                free: UniformSampler | None = free_space_sampler(region.poly, obstacles_for(candidates, rotation, half))
+                obstacles = obstacles_for(candidates, rotation, half) + excluded
+                free: UniformSampler | None = free_space_sampler(region.poly, obstacles)
             except EmptyRegionError:
                 free = None
             self._free_cache[key] = free
@@ -325,8 +334,12 @@ class SequentialSampler:
 
     def _accept(
         self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, position: np.ndarray,
-        candidates: list[PlacedBox], checks: tuple[RequireCheck, ...], run: Attempt,
+        candidates: list[PlacedBox], checks: tuple[RequireCheck, ...], run: Attempt, excluded: Sequence[Polytope] = (),
     ) -> bool:
+        if inside_any(excluded, position):
+            run.stats.add(CONTAINMENT)  # hit-and-run only: exact draws come from outside the cells
+            run.fail("blocked", rt.plan.index, [])
+            return False
         obj.position = position
         rt.late_rotation(obj, run.ctx)
         assert obj.rotation is not None
@@ -382,7 +395,10 @@ class SequentialSampler:
             return PrscError(f"{head}: its region was empty ({inner.message.split(': ', 1)[-1]})", span, inner.notes)
         if failure.kind == "blocked":
             notes = tuple((f"blocked by {q.name}", self.runtimes[q.index].plan.span) for q in failure.blockers)
-            return PrscError(f"{head}: no free position (every position collides)", span, notes)
+            exclusions = self.runtimes[failure.index].plan.exclusions
+            notes += tuple((f"excluded by {labels[r.label_id].text}", r.span) for r in exclusions)
+            why = "every position collides or is excluded" if exclusions else "every position collides"
+            return PrscError(f"{head}: no free position ({why})", span, notes)
         if failure.kind == "require" and failure.label >= 0:
             lab = labels[failure.label]
             return PrscError(f"{head}: a require never held", span, ((f"this require: {lab.text}", lab.span),))

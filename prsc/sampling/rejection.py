@@ -3,9 +3,9 @@
 Each object's position is drawn uniformly from its base region: the workspace's bounding
 box, cut by its equalities (`at`, `aligned with`, ...) and, for `on X`, X's surface (as
 the original sampled `on`). Every other relation is a test on that draw: containment
-(`completely`, `in`, the workspace), relative position (`left of`, ...), collisions with
-the objects before it, and every `require` (none is lowered here). The first failed test
-rejects the whole scene, counted by cause as in the paper's Table II.
+(`completely`, `in`, the workspace, `[not] visible from`), relative position (`left of`,
+...), collisions with the objects before it, and every `require` (none is lowered here).
+The first failed test rejects the whole scene, counted by cause as in the paper's Table II.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from prsc.sampling.baseline import baseline_region
 from prsc.sampling.collisions import PlacedBox, first_hit, near
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.regions import RegionProvider, violated_rule
-from prsc.sampling.runtime import build_runtimes, draw_soft_requires, evaluate_params
+from prsc.sampling.runtime import build_runtimes, draw_soft_requires, evaluate_params, inside_any
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
 
@@ -96,6 +96,8 @@ class RejectionSampler:
         label = violated_rule(rt.provider, ctx, support, obj.position)
         if label is not None:
             return labels[label].cause
+        if inside_any(rt.excluded(ctx, support), obj.position):
+            return CONTAINMENT  # wholly in the view of a camera it must not be visible from
         rt.finish(obj, ctx)
         box = rt.placed_box(obj, half, ctx)
         if not box.allow and placed:

@@ -3,17 +3,28 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
+from prsc.constraints.build import excluded_cells
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import ConstraintProgram, ObjectPlan
 from prsc.constraints.orientation import orientation_of
 from prsc.constraints.support import Support
 from prsc.constraints.values import DIMENSIONS, ObjectValue, dimension, static_dims
+from prsc.geometry.polytope import Polytope
 from prsc.sampling.collisions import PlacedBox, aabb_reach
 from prsc.sampling.regions import RegionProvider
+
+# A point counts as inside an excluded cell only this far (m) inside every row: the free-space
+# pieces touch the cells' faces, and a point on a face is out of the (open) cell.
+EXCLUDED_TOL = 1e-9
+
+
+def inside_any(cells: Sequence[Polytope], p: np.ndarray) -> bool:
+    """Whether p lies inside one of the excluded cells (`not visible from C`)."""
+    return any(bool(cell.contains(p, -EXCLUDED_TOL)) for cell in cells)
 
 
 @dataclass(eq=False)
@@ -84,6 +95,15 @@ class ObjectRuntime:
             else:
                 support = Support(None, half, plan.orientation.bound_mode)  # type: ignore[union-attr]
         return obj, half, support
+
+    def excluded(self, ctx: SceneContext, support: Support) -> list[Polytope]:
+        """The cells its centre must stay out of in this scene (`not visible from C`): extra obstacles."""
+        return excluded_cells(self.plan.exclusions, ctx, support) if self.plan.exclusions else []
+
+    @property
+    def static_exclusions(self) -> bool:
+        """Whether its excluded cells are the same in every scene."""
+        return all(rule.static for rule in self.plan.exclusions)
 
     def allows_collisions(self, obj: ObjectValue, ctx: SceneContext) -> bool:
         """The object's allowCollisions."""

@@ -87,7 +87,8 @@ def test_completely_in_a_container_is_completely_on_its_floor(tmp_path):
     ("b = Bottle completely on shelf.width[0]\n", r"only a support-surface list can be indexed"),
     ("b = Bottle completely on shelf.boards[1], with height 0.5\n", r"does not fit under the next board"),
     ("t = Table on floor, left of shelf by 0.5\nb = Bottle completely in t\n", r"`completely in t` needs a container"),
-    ("cam = Camera at Vector3D(0, -1, 1)\nb = Bottle on floor, not visible from cam\n", r"`not visible from C` is not supported"),
+    ("cam = Camera at Vector3D(0, -1, 1)\nb = Bottle on floor, facing toward cam, not visible from cam\n",
+     r"`not visible from C` needs b's rotation before its position"),
     ("b = Bottle on floor, visible from shelf\n", r"'visible from' needs a camera"),
 ])
 def test_a_bad_surface_container_or_camera_is_an_error_at_its_line(tmp_path, line, message):

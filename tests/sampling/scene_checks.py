@@ -568,7 +568,10 @@ def _check_specifier(ev: Evaluator, body: Body, spec: ir.Specifier) -> str | Non
         camera = ev.ev(spec.camera)
         if not isinstance(camera, Body):
             raise Unknown("visible from a non-object")
-        return _outside_view(camera, body)
+        worst = _view_excess(camera, body)
+        if getattr(spec, "outside", False):  # `not visible from C`: some corner out of the view
+            return None if worst >= -TOL else f"wholly inside the view of {camera.name} (by {-worst:.3g})"
+        return None if worst <= TOL else f"outside the view of {camera.name} by {worst:.3g}"
     if isinstance(spec, ir.On):
         target = ev.ev(spec.target)
         inside = getattr(spec, "inside", False)
@@ -738,8 +741,10 @@ def _centre_of_mass_supported(ev: Evaluator, body: Body, spec: ir.StablyOn) -> s
     return None
 
 
-def _outside_view(camera: Body, body: Body) -> str | None:
-    """docs/language.md "`visible from C`": every corner in front of the camera's box, within the far
+def _view_excess(camera: Body, body: Body) -> float:
+    """How far the box's worst corner lies out of the camera's view (<= 0: wholly inside).
+
+    docs/language.md "`visible from C`": every corner in front of the camera's box, within the far
     plane (the camera's `far`, else 3 m) and inside the image's edges (fovy, resolution)."""
     info = camera.data.get("camera")
     if not info:
@@ -752,7 +757,7 @@ def _outside_view(camera: Body, body: Body) -> str | None:
     x, y, z = local[:, 0], local[:, 1], local[:, 2]
     worst = max(float((camera.dims[1] / 2 - y).max()), float((y - far).max()),
                 float((np.abs(x) - y * tan_x).max()), float((np.abs(z) - y * tan_z).max()))
-    return None if worst <= TOL else f"outside the view of {camera.name} by {worst:.3g}"
+    return worst
 
 
 REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints"
