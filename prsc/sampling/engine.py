@@ -32,16 +32,17 @@ from typing import Any, Sequence
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.diagnostics import explain_empty, numeric_failure
+from prsc.constraints.diagnostics import numeric_failure
 from prsc.constraints.model import COLLISION, CONTAINMENT, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
 from prsc.constraints.values import ObjectValue
-from prsc.errors import PrscError, Span
+from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
-from prsc.sampling.attempt import Attempt, Failure, Limits
+from prsc.sampling.attempt import Attempt, Limits
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
+from prsc.sampling.dead_ends import dead_end_error
 from prsc.sampling.gibbs import GibbsSweeps
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.regions import Prepared
@@ -134,7 +135,9 @@ class SequentialSampler:
             params = evaluate_params(self.cprog, ctx)
             objects = [ctx.objects[rt.plan.name] for rt in self.runtimes]
             return SceneResult(objects, params, run.stats, ctx)
-        raise self._error(seed, index, run.stats, run.failure, tried)
+        raise dead_end_error(self.cprog.labels, [rt.plan for rt in self.runtimes], self._declarations,
+                             f"could not sample scene {index} (seed {seed}) in {tried} attempts; rejections: {run.stats.summary()}",
+                             run.failure)
 
     def _scene_checks_hold(self, run: Attempt) -> bool:
         for check in self.cprog.scene_checks:
@@ -379,27 +382,3 @@ class SequentialSampler:
                     run.failure.kind, run.failure.label = "require", check.label_id
                     return False
         return True
-
-    # ------------------------------------------------------------ errors
-    def _error(self, seed: int, index: int, stats: RejectionStats, failure: Failure, attempts: int) -> PrscError:
-        labels = self.cprog.labels
-        head = f"could not sample scene {index} (seed {seed}) in {attempts} attempts; rejections: {stats.summary()}"
-        span: Span | None = None
-        if 0 <= failure.index < len(self.runtimes):
-            plan = self.runtimes[failure.index].plan
-            span = plan.span
-            head += f"; last dead end at {plan.name}"
-        if failure.kind == "empty" and failure.rows is not None:
-            name = self.runtimes[failure.index].plan.name
-            inner = explain_empty(labels, failure.rows, name, span, "dead end", self._declarations)
-            return PrscError(f"{head}: its region was empty ({inner.message.split(': ', 1)[-1]})", span, inner.notes)
-        if failure.kind == "blocked":
-            notes = tuple((f"blocked by {q.name}", self.runtimes[q.index].plan.span) for q in failure.blockers)
-            exclusions = self.runtimes[failure.index].plan.exclusions
-            notes += tuple((f"excluded by {labels[r.label_id].text}", r.span) for r in exclusions)
-            why = "every position collides or is excluded" if exclusions else "every position collides"
-            return PrscError(f"{head}: no free position ({why})", span, notes)
-        if failure.kind == "require" and failure.label >= 0:
-            lab = labels[failure.label]
-            return PrscError(f"{head}: a require never held", span, ((f"this require: {lab.text}", lab.span),))
-        return PrscError(head, span)

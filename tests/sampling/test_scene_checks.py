@@ -40,9 +40,15 @@ def test_every_spec_with_objects_is_covered():
     assert PRESENT <= ({"tableCube.prs", "tableCubeNaive.prs"} <= names)
 
 
+# Ten cubes packed on one tray cost 0.25 s a scene even sequentially (a packed cube is sought
+# by rejection before its free space is decomposed): a tenth of the scenes.
+DENSE = {"ten_cubes_tray.prs": 10}
+
+
 @pytest.mark.parametrize("program", PROGRAMS)
 @pytest.mark.parametrize("law, n_scenes", [("sequential", N_SCENES), ("joint", N_JOINT)])
 def test_exact_scenes_satisfy_every_relation(program, law, n_scenes):
+    n_scenes //= DENSE.get(Path(program.path).name, 1)
     sampler = Sampler(program, "exact", law=law)
     report = check_scenes(program, (sampler.scene(7, index) for index in range(n_scenes)))
     assert not report, report
@@ -62,7 +68,8 @@ def test_baseline_samplers_satisfy_every_relation(program):
         names.append("rejection")
     for name in names:
         sampler = Sampler(program, name)
-        report = check_scenes(program, (sampler.scene(3, index) for index in range(10)))
+        n_scenes = 10 // DENSE.get(Path(program.path).name, 1)
+        report = check_scenes(program, (sampler.scene(3, index) for index in range(n_scenes)))
         assert not report, (name, report)
 
 
