@@ -21,10 +21,11 @@ test: $(STAMP)
 	$(PY) -m pytest -q -n 2 --dist loadfile
 
 # The Table-Cube spec -> 8 MuJoCo scenes: check it, compile it, load and step scene 0,
-# and draw a contact sheet of all 8 (out/demo/table_cube_sheet.png).
+# and draw a contact sheet of all 8 (out/demo/table_cube_sheet.png). --force: a demo folder
+# left by an older prsc (another law or model library) is replaced, only the files it listed.
 demo: $(STAMP)
 	$(PRSC) check specs/table_cube.prs
-	$(PRSC) compile specs/table_cube.prs --target mjcf -n 8 --seed 0 -o out/demo
+	$(PRSC) compile specs/table_cube.prs --target mjcf -n 8 --seed 0 -o out/demo --force
 	$(PY) -m prsc.backends.settle_report out/demo/table_cube/mjcf/00000.xml
 	$(PRSC) preview specs/table_cube.prs -n 8 --seed 0 -o out/demo/table_cube_sheet.png
 	@echo "scenes: out/demo/table_cube/mjcf/*.xml   contact sheet: out/demo/table_cube_sheet.png"

@@ -59,7 +59,7 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--meshes-anywhere", action="store_true",
                         help="let `with mesh` read absolute paths and paths outside the spec's and --include folders")
     parser.add_argument("--force", action="store_true",
-                        help="replace the scenes of another spec or seed in the output folder (only files its manifest lists)")
+                        help="replace the scenes of another spec, imported file, seed, law or proposal in the output folder (only files its manifest lists)")
     parser.add_argument("--settle-check", action="store_true", help=SETTLE_HELP)
     add_proposal_argument(parser)
     add_executor_arguments(parser)
@@ -300,8 +300,8 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     ):
         if entries and not force:
             was = f"seed {manifest.get('seed')!r} of {manifest.get('spec', 'another spec')}"
-            raise PrscError(f"{root} holds {len(entries)} scenes of another spec or seed ({was}); "
-                            "pass --force to replace them, or choose another output folder")
+            raise PrscError(f"{root} holds {len(entries)} scenes of another spec, imported file, seed, law or "
+                            f"proposal ({was}); pass --force to replace them, or choose another output folder")
         remove_listed(root, entries)
         manifest, entries = None, {}
     job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,

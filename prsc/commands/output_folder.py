@@ -150,7 +150,7 @@ def _absorb_journal(root: Path, entries: dict[int, dict[str, str]]) -> None:
 
 
 def remove_listed(root: Path, entries: dict[int, dict[str, str]]) -> None:
-    """Delete the files a validated manifest lists (outputs of another spec or seed), and nothing else."""
+    """Delete the files a validated manifest lists (outputs of other sources), and nothing else."""
     try:
         for files in entries.values():
             for rel in files.values():

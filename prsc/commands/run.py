@@ -56,7 +56,7 @@ def add_parser(subparsers) -> None:
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
     parser.add_argument("--force", action="store_true",
-                        help="replace the scenes of another spec or seed in the output folder (only files prsc listed)")
+                        help="replace the scenes of another spec, imported file, seed, law or proposal in the output folder (only files prsc listed)")
 
 
 def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: Sequence[str]) -> list[dict]:

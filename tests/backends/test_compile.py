@@ -95,7 +95,7 @@ def test_a_changed_spec_or_seed_rewrites_the_scenes_only_with_force(tmp_path, ca
     source.write_text("".join(json.dumps(s) + "\n" for s in scenes))
     before = _all_files(root)
     assert main(["compile", str(source), "-n", "2", "-o", str(tmp_path / "out")]) == 2
-    assert "holds 2 scenes of another spec or seed" in capsys.readouterr().err
+    assert "holds 2 scenes of another spec, imported file, seed, law or proposal" in capsys.readouterr().err
     assert _all_files(root) == before
     compile_scenes(str(source), ["json"], 2, 0, str(tmp_path / "out"), force=True)
     assert json.loads((root / "json" / "00000.json").read_text())["objects"][1]["color"] == [0, 1, 0, 1]
