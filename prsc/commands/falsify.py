@@ -160,15 +160,14 @@ def run(args: argparse.Namespace) -> int:
     console = Console(stderr=True)
     proposal = Proposal()
     # An empty proposal draws exactly as the spec's (sequential) law does, recording where each
-    # draw fell (for the clusters).
+    # draw fell (for the clusters). Later rounds swap the proposal into the same compiled sampler.
     sampler = compile_sampler(str(source), args.include, law="sequential", proposal=proposal)
     records: list[dict] = []
     masses: dict = {}
     start = 0
     for number, size in enumerate(round_sizes(args.budget, args.rounds)):
         if number and args.method != "uniform":
-            sampler = compile_sampler(str(source), args.include, law="sequential",
-                                      proposal=replace(proposal, strata=round_strata(args.seed, number, start, size)))
+            sampler.set_proposal(replace(proposal, strata=round_strata(args.seed, number, start, size)))
         scenes, info, seen = draw_round(sampler, args.seed, start, size)
         masses.update(seen)
         if start + size <= len(finished):  # a finished round of the killed campaign: its draws rebuild the proposal

@@ -82,6 +82,12 @@ class Sampler:
                 self.constraints, sampler, walk_length, law == "rejection", limits, proposal, sweeps if law == "joint" else 0
             )
 
+    def set_proposal(self, proposal: Proposal) -> None:
+        """Draw the next scenes from `proposal` instead (a sampler built with one), keeping the compiled spec and its cut cells."""
+        if not isinstance(self._engine, SequentialSampler) or self._engine.proposal is None:
+            raise PrscError("only a sampler built with a proposal draws from another one")
+        self._engine.proposal = proposal
+
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
         return self._engine.sample(seed, index)
