@@ -14,7 +14,7 @@ from prsc.constraints.stacks import rows_stably
 from prsc.constraints.support import Support
 from prsc.constraints.visibility import rows_visible
 from prsc.geometry.polytope import Polytope
-from prsc.ir.builtins import DENSITY
+from prsc.ir.builtins import default_mass
 
 Builder = Callable[[Rule, list[Any], Support], Polytope]
 
@@ -33,7 +33,7 @@ BUILDERS: dict[str, Builder] = {
     "in": lambda r, v, s: rows.rows_in(v[0], r.option("completely"), s, r.label_id, r.span),
     "on": lambda r, v, s: rows.rows_on(v[0], r.option("completely"), s, r.label_id, r.span, bool(r.option("inside_asset")),
                                        bool(r.option("inside"))),
-    "stably": lambda r, v, s: rows_stably(v, r.option("mass") or DENSITY * 8 * float(np.prod(s.half)), s, r.label_id, r.span),
+    "stably": lambda r, v, s: rows_stably(v, r.option("mass") or default_mass(*(2.0 * s.half)), s, r.label_id, r.span),
     "visible": lambda r, v, s: rows_visible(v[0], s, r.label_id, r.span),
     # The excluded cell (ObjectPlan.exclusions): the centres where the box is wholly in view.
     "not visible": lambda r, v, s: rows_visible(v[0], s, r.label_id, r.span, "not visible from"),

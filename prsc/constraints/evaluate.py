@@ -212,26 +212,25 @@ class ExprCompiler:
         tf = self.compile(e.target).fn
         return Compiled(lambda ctx: face_point(tf(ctx), words, span), False)
 
+    def _pair(self, left: ir.Expr, right: ir.Expr, apply: Callable[[Any, Any], Any]) -> Compiled:
+        """`apply` over two compiled operands, folded to a constant when both are."""
+        lc, rc = self.compile(left), self.compile(right)
+        if lc.const and rc.const:
+            return constant(apply(lc.value, rc.value))
+        lf, rf = lc.fn, rc.fn
+        return Compiled(lambda ctx: apply(lf(ctx), rf(ctx)), False)
+
     def _c_RelativeTo(self, e: ir.RelativeTo) -> Compiled:
-        value, frame, span = self.compile(e.value), self.compile(e.frame), e.span
-        if value.const and frame.const:
-            return constant(relative_to(value.value, frame.value, span))
-        vf, ff = value.fn, frame.fn
-        return Compiled(lambda ctx: relative_to(vf(ctx), ff(ctx), span), False)
+        span = e.span
+        return self._pair(e.value, e.frame, lambda v, f: relative_to(v, f, span))
 
     def _c_Distance(self, e: ir.Distance) -> Compiled:
-        source, target, span = self.compile(e.source), self.compile(e.target), e.span
-        if source.const and target.const:
-            return constant(distance(source.value, target.value, span))
-        sf, tf = source.fn, target.fn
-        return Compiled(lambda ctx: distance(sf(ctx), tf(ctx), span), False)
+        span = e.span
+        return self._pair(e.source, e.target, lambda s, t: distance(s, t, span))
 
     def _c_BinOp(self, e: ir.BinOp) -> Compiled:
-        left, right, op, span = self.compile(e.left), self.compile(e.right), e.op, e.span
-        if left.const and right.const:
-            return constant(binary(op, left.value, right.value, span))
-        lf, rf = left.fn, right.fn
-        return Compiled(lambda ctx: binary(op, lf(ctx), rf(ctx), span), False)
+        op, span = e.op, e.span
+        return self._pair(e.left, e.right, lambda a, b: binary(op, a, b, span))
 
     def _c_UnaryOp(self, e: ir.UnaryOp) -> Compiled:
         operand, op, span = self.compile(e.operand), e.op, e.span

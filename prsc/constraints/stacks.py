@@ -25,7 +25,7 @@ from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope, intersect
-from prsc.ir.builtins import DENSITY
+from prsc.ir.builtins import default_mass
 
 MARGIN = 0.25
 """Each face is shrunk by this fraction of its half-extents: a centre of mass right at an edge
@@ -37,7 +37,7 @@ def object_mass(obj: ObjectValue) -> float:
     if isinstance(mass, (int, float)) and not isinstance(mass, bool) and mass > 0:
         return float(mass)
     assert obj.dims is not None
-    return DENSITY * float(np.prod(obj.dims))
+    return default_mass(*(float(d) for d in obj.dims))
 
 
 def _face_rows(support: ObjectValue) -> tuple[np.ndarray, np.ndarray]:

@@ -11,6 +11,12 @@ ROOT_CLASS = "Object"
 BUILTIN_SPAN = Span("<builtin Object>", 1, 1, 1, 1)  # where Object's defaults are "written"
 DENSITY = 500.0  # kg/m^3 of an object that declares no `mass` (docs/language.md section 11)
 
+
+def default_mass(width: float, length: float, height: float) -> float:
+    """The mass of an object that declares no `mass`: DENSITY times its box volume."""
+    return DENSITY * (width * length * height)
+
+
 # Built-in properties and the static types a value for them may have.
 PROPERTY_TYPES: dict[str, frozenset[Type]] = {
     "position": frozenset({Type.VECTOR, Type.ORIENTED_POINT}),
