@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -102,11 +103,11 @@ def specifier_rule(low: LoweringState, obj: ObjectDecl, spec: ir.Specifier, supp
     if kind == "on" and rule.option("completely"):
         relaxed_options = (("completely", False), ("inside_asset", True), ("inside", rule.option("inside")))
         relaxed = _with_template(low, Rule(kind, label, spec.span, args, relaxed_options, None, None, values), support, me)
-        rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
+        rule = replace(rule, relaxed=relaxed)
     if kind == "stably":
         # What the rejection baseline draws from: resting on X (the stack's rows are its test).
         relaxed = _with_template(low, Rule("on", label, spec.span, args[:1], (), None, None, values[:1]), support, me)
-        rule = Rule(kind, label, spec.span, args, options, rule.template, None, values, relaxed)
+        rule = replace(rule, relaxed=relaxed)
     return rule
 
 
@@ -150,4 +151,4 @@ def _with_template(low: LoweringState, rule: Rule, support: Support | None, me: 
     found = template(low, rule, support, me)
     if found is None:
         return rule
-    return Rule(rule.kind, rule.label_id, rule.span, rule.args, rule.options, found, rule.soft, rule.values)
+    return replace(rule, template=found)

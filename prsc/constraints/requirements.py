@@ -93,13 +93,14 @@ Lowering = Callable[..., Callable[[SceneContext], tuple[list, list, list, list]]
 
 
 def _template(low: LoweringState, me: ObjectValue, req: Require, label: int, anchor: str | None,
-              lowering: Lowering = lower_condition) -> RowTemplate | None:
-    """The require's rows when everything but the target (and the anchor) is constant, else None."""
+              lowering: Lowering = lower_condition, lowered: Callable | None = None) -> RowTemplate | None:
+    """The require's rows when everything but the target (and the anchor) is constant, else None;
+    `lowered` is the condition already lowered with this anchor, if the caller has it."""
     target = me.name
     names = {target} | ({anchor} if anchor else set())
     if not constant_apart_from(low.compiler, req.condition, names):
         return None
-    cond = lowering(low.compiler, req.condition, target, anchor)
+    cond = lowered if lowered is not None else lowering(low.compiler, req.condition, target, anchor)
     if cond is None:
         return None
     poly, bt, dt = _rows6(cond(low.fixed_context(me, anchor)), label)
@@ -119,7 +120,7 @@ def require_rule(low: LoweringState, me: ObjectValue, req: Require, label: int, 
         return None
     template = None
     if soft is None and support_known:
-        template = _template(low, me, req, label, None, lowering)
+        template = _template(low, me, req, label, None, lowering, cond)
         if template is None:
             order = sorted((low.index_of[n] for n in mentioned_objects(req.condition) if n != me.name), reverse=True)
             for index in order:
