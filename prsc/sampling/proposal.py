@@ -20,6 +20,7 @@ round 0 of a campaign is the scenes `prsc sample` draws.
 from __future__ import annotations
 
 import json
+import weakref
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -208,19 +209,18 @@ def load_proposal(path: str | Path) -> Proposal:
         raise PrscError(f"{path}: {error.message}") from None
 
 
-_CELLS: dict[int, tuple[Any, Cells | None]] = {}  # id(prepared region) -> (region, its cells)
+# Prepared region or free space -> its cells, while it lives (static and anchored ones live
+# with the sampler, a scene's own ones with the scene).
+_CELLS: weakref.WeakKeyDictionary[Any, Cells | None] = weakref.WeakKeyDictionary()
 
 
 def _cached(owner: Any, cut: Callable[[], Cells | None]) -> Cells | None:
     """The cells of `owner` (a prepared region or free space), cut once while it lives."""
-    hit = _CELLS.get(id(owner))
-    if hit is not None and hit[0] is owner:
-        return hit[1]
-    if len(_CELLS) > 4096:
-        _CELLS.clear()
-    cells = cut()
-    _CELLS[id(owner)] = (owner, cells)
-    return cells
+    try:
+        return _CELLS[owner]
+    except KeyError:
+        cells = _CELLS[owner] = cut()
+        return cells
 
 
 def region_cells(region: Any) -> Cells | None:

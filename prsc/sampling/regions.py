@@ -35,7 +35,7 @@ _CACHE_SIZE = 256
 class Prepared:
     """A non-empty region ready for drawing: exact sampler, bounds, affine hull (lazily)."""
 
-    __slots__ = ("poly", "sampler", "point", "lo", "hi", "_affine")
+    __slots__ = ("poly", "sampler", "point", "lo", "hi", "_affine", "__weakref__")  # weak: proposal.py's cells
 
     def __init__(self, poly: Polytope, sampler: UniformSampler | None, point: np.ndarray | None = None) -> None:
         self.poly = poly
