@@ -72,7 +72,10 @@ def record_episode(task: EpisodeTask, sim_seconds: float) -> tuple[EpisodeResult
     every = max(sim_seconds, 1e-3) / FRAMES_WITHOUT_SNAPSHOTS
 
     def observe(label: str, model: mujoco.MjModel, data: mujoco.MjData) -> None:
-        (timed if label.startswith("t = ") else named)(label, model, data)
+        if not label.startswith("t = "):
+            named(label, model, data)
+        elif not named.frames:  # once the controller names a moment, the timed frames are not shown
+            timed(label, model, data)
 
     try:
         result = run_episode(task, observer=observe, frame_every=every)

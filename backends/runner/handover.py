@@ -70,11 +70,8 @@ class HandoverEpisode:
     def __init__(self, scene: dict, model: mujoco.MjModel, data: mujoco.MjData):
         self.scene = scene
         self.roles = find_roles(scene)
-        self.model = model
-        self.data = data
         self.sim = Simulation(model, data)
         self.cube = HeldCube(self.sim, self.roles.cube)
-        self.cube_half = self.cube.half_height
         self.left = Arm.from_scene(model, data, self.roles.left_robot["body"])
         self.right = Arm.from_scene(model, data, self.roles.right_robot["body"])
         self.camera: CeilingCamera | None = None
@@ -86,11 +83,11 @@ class HandoverEpisode:
     def perceive(self, stage: str) -> np.ndarray:
         """Locate the cube with the ceiling camera; a miss or a > 2 cm error ends the episode."""
         if self.camera is None:
-            self.camera = CeilingCamera(self.model, self.roles.camera["body"])
-        rgb, depth = self.camera.capture(self.data)
-        cam_pos, cam_mat = self.camera.pose(self.data)
+            self.camera = CeilingCamera(self.sim.model, self.roles.camera["body"])
+        rgb, depth = self.camera.capture(self.sim.data)
+        cam_pos, cam_mat = self.camera.pose(self.sim.data)
         detection = locate_cube(rgb, depth, self.camera.intrinsics, cam_pos, cam_mat,
-                                self.roles.cube["color"], self.cube_half)
+                                self.roles.cube["color"], self.cube.half_height)
         self.sim.snapshot(f"perceive ({stage})")
         if detection is None:
             raise EpisodeEnd("perception_fault", f"{stage}: cube not detected in the camera image")
@@ -116,7 +113,7 @@ class HandoverEpisode:
         """Run the task; return (outcome, reason)."""
         roles = self.roles
         try:
-            handover = _handover_point(self.scene, roles, self.cube_half)
+            handover = _handover_point(self.scene, roles, self.cube.half_height)
             target = self.cube.release_point(roles.target_tray)
             cube = self.perceive("source tray")
             # The left arm goes home afterwards to clear the camera's view of the handover point.

@@ -95,8 +95,9 @@ def arm_ik(arm: str, base_pos: np.ndarray, base_quat: np.ndarray) -> ArmIK:
 
     Every solve starts from the configuration it is given, so a re-posed solver answers
     exactly as a freshly compiled one would."""
-    if arm not in _solvers:
-        _solvers[arm] = ArmIK(base_pos, base_quat)
-    solver = _solvers[arm]
-    solver.place(base_pos, base_quat)
+    solver = _solvers.get(arm)
+    if solver is None:
+        solver = _solvers[arm] = ArmIK(base_pos, base_quat)
+    else:
+        solver.place(base_pos, base_quat)
     return solver

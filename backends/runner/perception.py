@@ -122,7 +122,7 @@ class CeilingCamera:
 
     def capture(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """An RGB image (H x W x 3, uint8) and a metric z-depth image (H x W, metres)."""
-        return self._renderer.rgb(data, self.camera_id), self._renderer.depth(data, self.camera_id)
+        return self._renderer.rgb_depth(data, self.camera_id)
 
     def pose(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """World position and rotation matrix (columns = camera axes) of the camera."""

@@ -52,15 +52,27 @@ class OffscreenRenderer:
         """An RGB image (H x W x 3, uint8) from a camera id or a free MjvCamera."""
         gl_context()
         self._update(data, camera)
-        image = np.empty((self.height, self.width, 3), dtype=np.uint8)
-        mujoco.mjr_render(self._rect, self._scene, self._context)
-        mujoco.mjr_readPixels(image, None, self._rect, self._context)
-        return np.flipud(image).copy()
+        return self._render_rgb()
 
     def depth(self, data: mujoco.MjData, camera: int) -> np.ndarray:
         """Metric z-depth (H x W, metres), rendered as `mujoco.Renderer` does (segmentation colours)."""
         gl_context()
         self._update(data, camera)
+        return self._render_depth()
+
+    def rgb_depth(self, data: mujoco.MjData, camera: int) -> tuple[np.ndarray, np.ndarray]:
+        """`rgb` and `depth` of one camera from one update of the scene."""
+        gl_context()
+        self._update(data, camera)
+        return self._render_rgb(), self._render_depth()
+
+    def _render_rgb(self) -> np.ndarray:
+        image = np.empty((self.height, self.width, 3), dtype=np.uint8)
+        mujoco.mjr_render(self._rect, self._scene, self._context)
+        mujoco.mjr_readPixels(image, None, self._rect, self._context)
+        return np.flipud(image).copy()
+
+    def _render_depth(self) -> np.ndarray:
         flags = self._scene.flags.copy()
         self._scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT] = True
         self._scene.flags[mujoco.mjtRndFlag.mjRND_IDCOLOR] = True

@@ -317,7 +317,8 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
 
     reset_model_warnings()  # once per class per run, also in workers forked below
     seen_warnings: set[str] = set()
-    total = sum(1 for _ in todo()) if n <= 100_000 else 0  # a progress total only when cheap to count
+    todo_list = list(todo()) if n <= 100_000 else None  # walked once: a progress total when cheap to count
+    total = len(todo_list or ())
     bar = progress_bar(total)
     task = bar.add_task("compile", total=total) if bar else None
     next_checkpoint = [time.monotonic() + CHECKPOINT_SECONDS]
@@ -353,7 +354,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     try:
         if bar:
             bar.start()
-        pending = iter(todo())
+        pending = iter(todo_list if todo_list is not None else todo())
         executor = executor or LocalExecutor(jobs, start="fork")
         if isinstance(executor, LocalExecutor) and executor.jobs > 1:
             # The first scene in this process warms the per-process caches (robot

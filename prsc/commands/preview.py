@@ -94,6 +94,7 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: 
     import mujoco
 
     from prsc.backends.mjcf import render
+    from prsc.backends.runner.harness import fresh_data
     from prsc.backends.scene import parse_scene
     from prsc.backends.store import AssetStore
 
@@ -101,10 +102,7 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: 
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(render(parse_scene(scene), path, AssetStore(folder / "assets")))
     model = mujoco.MjModel.from_xml_path(str(path))
-    data = mujoco.MjData(model)
-    if model.nkey:
-        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
+    data = fresh_data(model)
     if camera_name is not None:
         # The backends name an object's camera after the object (it looks along its +y).
         camera: Any = camera_name

@@ -69,15 +69,12 @@ def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: S
     return [spec_sampler(str(source), seed, include_dirs)(0)]
 
 
-def _compiled(root: Path, manifest: dict, count: int | None) -> list[tuple[dict, Path]]:
+def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
     """(scene, MJCF path) of every compiled scene of the folder's manifest, in index order."""
-    pairs = []
-    for entry in sorted(manifest["scenes"], key=lambda e: e["index"]):
-        if count and entry["index"] >= count:
-            continue
-        scene = json.loads((root / entry["files"]["json"]).read_text(encoding="utf-8"))
-        pairs.append((scene, root / entry["files"]["mjcf"]))
-    return pairs
+    from prsc.backends.settle_check import compiled_scenes
+
+    return [(json.loads(scene.read_text(encoding="utf-8")), mjcf)
+            for _, scene, mjcf in compiled_scenes(root, range(count) if count else None)]
 
 
 def _campaign_key(manifest: dict, args: argparse.Namespace, controller_digest: str) -> dict:
@@ -197,10 +194,9 @@ def run(args: argparse.Namespace) -> int:
     from prsc.commands.compile import MANIFEST
 
     manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
-    pairs = _compiled(root, manifest, count)
-    scenes = [scene for scene, _ in pairs]
-    if check is not None:
-        for scene in scenes:
+    pairs = _compiled(root, count)
+    if check is not None and not is_json:  # a JSON input's scenes were all checked above
+        for scene, _ in pairs:
             check(scene)
     tasks = [EpisodeTask(k, scene, str(mjcf), int(scene.get("seed", args.seed)), controller_ref, args.max_sim_seconds)
              for k, (scene, mjcf) in enumerate(pairs)]
@@ -242,7 +238,7 @@ def run(args: argparse.Namespace) -> int:
     plot_outcomes(ordered, out / "outcomes.png", title, declared)
     report = getattr(controller, "report", None)
     if report is not None:
-        report(ordered, scenes, out, title)
+        report(ordered, [scene for scene, _ in pairs], out, title)
     _write_strips(tasks, ordered, out, args.video)
 
     Console().print(summary_table(ordered, title, declared))
