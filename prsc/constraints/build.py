@@ -19,12 +19,19 @@ from prsc.ir.builtins import default_mass
 Builder = Callable[[Rule, list[Any], Support], Polytope]
 
 
+def rows_polytope(values: tuple[list, list, list, list], label: int, columns: int = 3) -> tuple[Polytope, np.ndarray, np.ndarray]:
+    """(rows on p, the further columns of the inequalities, of the equalities) from rows
+    (le_a, le_b, eq_a, eq_b) of `columns` columns, p's the first three."""
+    le_a, le_b, eq_a, eq_b = values
+    a = np.array(le_a, dtype=float).reshape(-1, columns)
+    c = np.array(eq_a, dtype=float).reshape(-1, columns)
+    poly = Polytope(a[:, :3], np.array(le_b, dtype=float), c[:, :3], np.array(eq_b, dtype=float),
+                    np.full(len(a), label), np.full(len(c), label))
+    return poly, a[:, 3:], c[:, 3:]
+
+
 def _require_rows(rule: Rule, values: list[Any], support: Support) -> Polytope:
-    le_a, le_b, eq_a, eq_b = values[0]
-    label = rule.label_id
-    a = np.array(le_a, dtype=float).reshape(-1, 3)
-    c = np.array(eq_a, dtype=float).reshape(-1, 3)
-    return Polytope(a, np.array(le_b, dtype=float), c, np.array(eq_b, dtype=float), np.full(len(a), label), np.full(len(c), label))
+    return rows_polytope(values[0], rule.label_id)[0]
 
 
 BUILDERS: dict[str, Builder] = {

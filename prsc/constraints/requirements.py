@@ -9,6 +9,7 @@ from typing import Any, Callable
 import numpy as np
 
 from prsc.constraints.analysis import rigid
+from prsc.constraints.build import rows_polytope
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import REQUIRE, RequireCheck, RowLabel, RowTemplate, Rule, SoftRequire
 from prsc.constraints.operations import truthy
@@ -16,7 +17,6 @@ from prsc.constraints.requires import constant_apart_from, implied_condition, lo
 from prsc.constraints.state import LoweringState
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span
-from prsc.geometry.polytope import Polytope
 from prsc.ir.program import Require
 
 
@@ -69,16 +69,6 @@ def require_check(low: LoweringState, req: Require, label: int, soft: int | None
     return RequireCheck(label, functools.partial(_holds, low.compiler.compile(req.condition).fn, req.span), soft)
 
 
-def _rows6(values: tuple[list, list, list, list], label: int) -> tuple[Polytope, np.ndarray, np.ndarray]:
-    """(rows on p, t-coefficients of the inequalities, of the equalities) from six-column rows."""
-    le_a, le_b, eq_a, eq_b = values
-    a = np.array(le_a, dtype=float).reshape(-1, 6)
-    c = np.array(eq_a, dtype=float).reshape(-1, 6)
-    poly = Polytope(a[:, :3], np.array(le_b, dtype=float), c[:, :3], np.array(eq_b, dtype=float),
-                    np.full(len(a), label), np.full(len(c), label))
-    return poly, a[:, 3:], c[:, 3:]
-
-
 def _on_p(cond: Callable[[SceneContext], tuple[list, list, list, list]]) -> Callable[[SceneContext], tuple]:
     """A condition's rows with the anchor columns dropped (no anchor: they are zero)."""
 
@@ -103,7 +93,8 @@ def _template(low: LoweringState, me: ObjectValue, req: Require, label: int, anc
     cond = lowered if lowered is not None else lowering(low.compiler, req.condition, target, anchor)
     if cond is None:
         return None
-    poly, bt, dt = _rows6(cond(low.fixed_context(me, anchor)), label)
+    # Six columns: p's, then the anchor's t.
+    poly, bt, dt = rows_polytope(cond(low.fixed_context(me, anchor)), label, 6)
     if not (bt.any() or dt.any()):
         return RowTemplate(poly, None)
     # Rigid: the anchor's columns are minus the target's, so the rows are on p - t.
