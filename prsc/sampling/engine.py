@@ -85,14 +85,14 @@ class SequentialSampler:
         # A falsification proposal (prsc/sampling/proposal.py): reweights region and range draws.
         self.proposal = proposal
         self.runtimes = build_runtimes(cprog)
-        self._index = {rt.plan.name: rt.plan.index for rt in self.runtimes}
+        self.index_of = {rt.plan.name: rt.plan.index for rt in self.runtimes}
         # Requires checked by rejection, per object (the object they are checked after).
-        self._checks: list[tuple[RequireCheck, ...]] = [rt.plan.checks for rt in self.runtimes]
+        self.checks: list[tuple[RequireCheck, ...]] = [rt.plan.checks for rt in self.runtimes]
         self._declarations = {rt.plan.name: rt.plan.span for rt in self.runtimes}
         # Per object: the earlier objects its rows read (dependencies, anchor, the objects
         # its specifiers and requires name), and whether re-placing an object can change it.
-        self._reads = [self._objects_read(rt) for rt in self.runtimes]
-        self._movable = [
+        self.reads = [self._objects_read(rt) for rt in self.runtimes]
+        self.movable = [
             rt.plan.static_position is None or rt.half is None or rt.rotation is None for rt in self.runtimes
         ]
         self._free_cache: dict[tuple[int, tuple[int, ...]], UniformSampler | None] = {}
@@ -174,9 +174,9 @@ class SequentialSampler:
     def _backtrack_target(self, k: int, blame: set[int]) -> int:
         """The latest earlier object worth re-placing (random, and implicated), or -1."""
         # Objects it collided with are the likeliest culprits; then what its region reads.
-        for group in (blame, self._reads[k]):
+        for group in (blame, self.reads[k]):
             for i in sorted(group, reverse=True):
-                if i < k and self._movable[i]:
+                if i < k and self.movable[i]:
                     return i
         return -1
 
@@ -187,7 +187,7 @@ class SequentialSampler:
             names.add(plan.region.anchor)
         for label_id in [r.label_id for r in plan.region.rules + plan.exclusions] + [c.label_id for c in plan.checks]:
             names.update(self.cprog.labels[label_id].refs)
-        return {self._index[n] for n in names if n in self._index}
+        return {self.index_of[n] for n in names if n in self.index_of}
 
     # ------------------------------------------------------------ one object
     def _place(self, k: int, run: Attempt) -> bool:
@@ -215,7 +215,7 @@ class SequentialSampler:
                 raise PrscError(
                     f"the region of {rt.plan.name} is unbounded: add a workspace or a bounding specifier", rt.plan.span
                 ) from error
-            if self._draw(rt, obj, half, region, shift, rt.excluded(ctx, support), run):
+            if self.draw_position(rt, obj, half, region, shift, rt.excluded(ctx, support), run):
                 rt.finish(obj, ctx)
                 run.placed.append(rt.placed_box(obj, half, ctx))
                 return True
@@ -230,7 +230,7 @@ class SequentialSampler:
         run.blame.update(q.index for q in candidates)
         return False
 
-    def _draw(
+    def draw_position(
         self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared, shift: np.ndarray | None,
         excluded: list[Polytope], run: Attempt,
     ) -> bool:
@@ -375,7 +375,7 @@ class SequentialSampler:
                 run.stats.add(COLLISION)
                 run.fail("blocked", q.index, [hit])
                 return False
-        for checks in self._checks:
+        for checks in self.checks:
             for check in checks:
                 if (check.soft is None or check.soft in run.ctx.active_requires) and not check.test(run.ctx):
                     run.stats.add(REQUIRE)

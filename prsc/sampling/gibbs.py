@@ -73,7 +73,7 @@ class GibbsSweeps:
         runtimes = engine.runtimes
         n = len(runtimes)
         readers: list[set[int]] = [set() for _ in range(n)]
-        for j, reads in enumerate(engine._reads):
+        for j, reads in enumerate(engine.reads):
             for i in reads:
                 if i != j:
                     readers[i].add(j)
@@ -90,9 +90,9 @@ class GibbsSweeps:
         # A group whose dependants have excluded cells (`not visible from C`) is not moved: the
         # acceptance ratios use each dependant's region measure, not that of region minus cells,
         # so such objects keep the sequential start (docs/sampling.md).
-        self.movable = [k for k in range(n) if engine._movable[k]
+        self.movable = [k for k in range(n) if engine.movable[k]
                         and not any(engine.runtimes[j].plan.exclusions for j in self.groups[k][1:])]
-        self.has_checks = any(engine._checks)
+        self.has_checks = any(engine.checks)
         # Fresh draws of a group need every dependant's rotation before its position.
         self.redraw = [all(not engine.runtimes[j].after_position for j in g[1:]) for g in self.groups]
         self._fixed_bounds()
@@ -112,7 +112,7 @@ class GibbsSweeps:
             own = rt.provider.fixed_bounds() if rt.support is not None else None
             anchor = rt.plan.region.anchor
             if own is not None and rt.provider.dynamic:
-                base = centre.get(self.engine._index[anchor]) if anchor in self.engine._index else None
+                base = centre.get(self.engine.index_of[anchor]) if anchor in self.engine.index_of else None
                 own = None if base is None else (own[0] + base[0], own[1] + base[1])
             centre[i] = own
         # Per movable object that can collide: its box's bounds (centre bounds, static reach) or None.
@@ -206,7 +206,7 @@ class GibbsSweeps:
             return False
         outside = [boxes[i] for i in range(len(boxes)) if i not in group]
         run.placed, run.draws = outside, 0
-        moved = engine._draw(rt, obj, half, region, shift, rt.excluded(ctx, support), run)
+        moved = engine.draw_position(rt, obj, half, region, shift, rt.excluded(ctx, support), run)
         run.placed = boxes
         if moved and redraw:
             moved = self._redraw(group, saved, run)
@@ -322,7 +322,7 @@ class GibbsSweeps:
             rests_in = runtimes[j].plan.rests_in
             if first_hit(near(others, box.center, box.center, q.reach, containers=rests_in), box.center, box.rotation, box.half_extents, q.reach):
                 return False
-        for checks in engine._checks:
+        for checks in engine.checks:
             for check in checks:
                 if (check.soft is None or check.soft in ctx.active_requires) and not check.test(ctx):
                     return False
