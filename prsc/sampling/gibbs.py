@@ -159,8 +159,7 @@ class GibbsSweeps:
                 if rt.provider.point_rule is not None:
                     lo = hi = obj.position  # `at` a point: the region is where the object is
                 else:
-                    ctx.level = k
-                    region, shift = rt.provider.region(ctx, _support(rt, obj.rotation, _half(obj)), rt.support is not None)
+                    region, shift = self._region(k, run)
                     lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
                 reach = boxes[k].reach
                 others = [q for q in boxes if q.index not in group and q.index in self.bounds]
