@@ -50,14 +50,14 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
     from prsc.backends.runner import harness, rendering
     from prsc.backends.runner.controller import parse_target
     from prsc.backends.runner.tasks import EpisodeTask
-    from prsc.commands.compile import MANIFEST, compile_scenes
+    from prsc.backends.settle_check import compiled_scenes
+    from prsc.commands.compile import compile_scenes
 
     with tempfile.TemporaryDirectory(prefix="prsc-run-bench-") as tmp:
         root = compile_scenes(spec, ["json", "mjcf"], n, 0, tmp, include_dirs=include_dirs)
-        entries = sorted(json.loads((root / MANIFEST).read_text())["scenes"], key=lambda e: e["index"])
         ref = parse_target(controller)
-        tasks = [EpisodeTask(e["index"], json.loads((root / e["files"]["json"]).read_text()),
-                             str(root / e["files"]["mjcf"]), 0, ref) for e in entries]
+        tasks = [EpisodeTask(index, json.loads(scene.read_text()), str(mjcf), 0, ref)
+                 for index, scene, mjcf in compiled_scenes(root)]
         harness.run_episode(tasks[0])
         totals: Counter = Counter()
         with _timed(harness, "load_model", totals, "load"), _timed(mujoco, "mj_step", totals, "step"), \

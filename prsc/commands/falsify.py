@@ -134,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
     from prsc.backends.runner.tasks import EpisodeTask
     from prsc.backends.runner.worker import WorkerConfig, run_task
+    from prsc.backends.settle_check import compiled_scenes
     from prsc.commands.compile import compile_scenes
     from prsc.commands.executors import make_executor, worker_count
     from prsc.commands.falsify_report import write_report
@@ -184,8 +185,7 @@ def run(args: argparse.Namespace) -> int:
         atomic_write(listing, "".join(json.dumps(s, separators=(",", ":")) + "\n" for s in scenes))
         root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs, args.include,
                               make_executor(args.executor, jobs, args.address, start="fork"), force=args.force)
-        manifest = json.loads((root / "manifest.json").read_text(encoding="utf-8"))
-        mjcf = {e["index"]: root / e["files"]["mjcf"] for e in manifest["scenes"]}
+        mjcf = {index: xml for index, _, xml in compiled_scenes(root)}
         tasks = [EpisodeTask(start + k, scene, str(mjcf[k]), args.seed, controller_ref, args.max_sim_seconds)
                  for k, scene in enumerate(scenes)]
         answers = executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"), tasks)
