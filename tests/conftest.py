@@ -12,7 +12,13 @@ import os
 import shutil
 import tempfile
 
-from hypothesis import settings
+# A fresh shell has no MUJOCO_GL: without a default, the first camera test makes MuJoCo
+# pick GLFW, which needs a display, and the xdist worker dies. The Makefile sets the same
+# default; this one holds for `pytest` run alone. Set before anything imports mujoco.
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ.setdefault("PYOPENGL_PLATFORM", os.environ["MUJOCO_GL"])
+
+from hypothesis import settings  # noqa: E402
 
 _OWNED = "PRSC_TEST_OWNS_BUILD_DIR"
 

@@ -12,7 +12,8 @@ def add_parser(subparsers) -> None:
     """Register `prsc check`."""
     parser = subparsers.add_parser(
         "check", help="parse and type-check specs; list objects and specifiers in evaluation order",
-        description="Parse and type-check .prs specs. Prints each object, its class and its specifiers "
+        description="Parse and type-check .prs specs, with every check `compile` makes before it samples "
+                    "(containers, meshes, reach, file names). Prints each object, its class and its specifiers "
                     "in evaluation order. Exit status 0 when every file is clean, 2 otherwise.")
     parser.add_argument("files", nargs="+", metavar="FILE", help="spec files (.prs)")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR",
@@ -35,13 +36,13 @@ def summarise(program) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every file; report each error; 2 if any file has one."""
-    from prsc.ir import compile_program
+    """Check every file as far as `compile` goes before sampling; report each error; 2 if any file has one."""
+    from prsc.commands.static_checks import compile_checked
 
     failed = 0
     for path in args.files:
         try:
-            program = compile_program(path, args.include)
+            program = compile_checked(path, args.include).program
         except PrscError as error:
             sys.stderr.write(format_error(error))
             failed += 1

@@ -26,7 +26,7 @@ import shutil
 import sys
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
@@ -150,7 +150,11 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
                     atomic_write_tree(path, data)
                 else:
                     atomic_write(path, data)
-                record_file(root, index, target, files[target])
+                try:
+                    record_file(root, index, target, files[target])
+                except OSError:
+                    _remove_written(path)  # in place but not recorded: this run just wrote it, so it goes
+                    raise
             except OSError as error:
                 raise write_error(error, path) from None
     from prsc.backends.bodies import UnknownModelWarning
@@ -160,6 +164,14 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     messages = [str(w.message) for w in caught if issubclass(w.category, UnknownModelWarning)]
     return index, files, messages
+
+
+def _remove_written(path: Path) -> None:
+    """Remove an output this process has just put in place (a file or a bundle folder)."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
 
 
 # ------------------------------------------------------------------ workers
@@ -209,24 +221,56 @@ def _run_parallel(job: Job, indices: Iterable[int], executor: Executor,
 # ------------------------------------------------------------------ the command
 
 
-def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, output: str, jobs: int = 1,
-                   include_dirs: Sequence[str] = (), executor: Executor | None = None, force: bool = False,
-                   meshes_anywhere: bool = False, proposal: dict | None = None, law: str | None = None) -> Path:
+@dataclass(frozen=True)
+class CompileOptions:
+    """How `compile_scenes` runs, apart from what it compiles and where."""
+
+    jobs: int = 1
+    include_dirs: tuple[str, ...] = ()  # --include: searched for a spec's imports and meshes
+    executor: Executor | None = None  # default: `jobs` forked local processes
+    force: bool = False  # replace the listed scenes of another spec or seed
+    meshes_anywhere: bool = False  # meshes may come from any folder
+    proposal: dict | None = None  # draw from a falsify proposal
+    law: str | None = None  # --law
+
+
+@dataclass(frozen=True)
+class _Run:
+    """One compile run, as `_compile_locked` needs it once the folder is locked."""
+
+    file: str
+    root: Path
+    targets: tuple[str, ...]
+    n: int
+    seed: int
+    options: CompileOptions
+    spec_digest: str
+    sources_digest: str
+    width: int
+    scenes: list[dict] | None
+    sampler: Callable[[int], dict] | None
+
+
+def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, output: str,
+                   **options: Any) -> Path:
     """Compile `n` scenes of `file` into `output/<stem>/`; returns that folder.
 
-    For scene JSON input, `n` None or 0 means every scene in the file; `include_dirs`
-    (--include) are searched for a spec's imports and meshes; `executor` (default: `jobs`
-    forked local processes) runs the scenes; `force` replaces the listed scenes of another
-    spec or seed; `meshes_anywhere` lets meshes come from any folder; `proposal` draws from a falsify proposal."""
+    For scene JSON input, `n` None or 0 means every scene in the file. `options` are the
+    fields of CompileOptions. Errors that one scene shows (a mesh outside the allowed
+    folders, a name too long for the file system, an impossible mass) are found before the
+    output folder is touched; a run that fails later leaves the folder as it was plus only
+    complete, recorded scenes."""
     from prsc.backends import TARGETS
 
+    settings = CompileOptions(**{**options, "include_dirs": tuple(options.get("include_dirs", ()))})
+    targets = tuple(targets)
     unknown = [t for t in targets if t not in TARGETS]
     if unknown or not targets:
         raise PrscError(f"unknown target {', '.join(unknown) or '(none)'}; choose from {', '.join(TARGETS)}")
     if n is not None and n < 0:
         raise PrscError(f"-n must be >= 0, got {n}")
-    if jobs < 1:
-        raise PrscError(f"--jobs must be >= 1, got {jobs}")
+    if settings.jobs < 1:
+        raise PrscError(f"--jobs must be >= 1, got {settings.jobs}")
     if seed < 0:
         raise PrscError(f"--seed must be >= 0, got {seed}")
     if not output:
@@ -234,6 +278,7 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
     path = Path(file)
     root = output_root(Path(output), path)
     program: Any = None  # the spec's IR, for errors a backend reports by object
+    law = settings.law
     if path.suffix in (".json", ".jsonl"):
         data = read_input(path)
         scenes: list[dict] | None = read_scene_file(path, data)
@@ -246,9 +291,10 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
         # Compile the spec before touching the output folder and before any worker starts:
         # a bad spec leaves nothing behind and its errors point into the spec. (Also before
         # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
-        from prsc.sampling import compile_sampler
+        from prsc.commands.static_checks import compile_checked
 
-        compiled = compile_sampler(str(file), include_dirs=include_dirs, law=law, proposal=proposal_from_json(proposal))
+        compiled = compile_checked(str(file), settings.include_dirs, law=law,
+                                   proposal=proposal_from_json(settings.proposal))
         law = compiled.law
         program = compiled.program
         sampler = functools.partial(compiled.scene, seed)
@@ -259,21 +305,62 @@ def compile_scenes(file: str, targets: list[str], n: int | None, seed: int, outp
             # The scenes also depend on every imported file (those found through --include
             # too): a change there makes them stale.
             sources.update(read_input(Path(imported)))
-        sources.update(proposal_key(proposal))  # scenes drawn from another proposal are stale
-    if executor is None:
-        jobs = worker_count(jobs)
-    width = max(DEFAULT_WIDTH, len(str(max(n - 1, 0))))
-    # The topmost folder this run creates: removed again if the run fails before any scene.
-    created = next((p for p in (*reversed(root.absolute().parents), root.absolute()) if not p.exists()), None)
-    prepare_root(root, targets)
-    lock = lock_folder(root)
+        sources.update(proposal_key(settings.proposal))  # scenes drawn from another proposal are stale
+    if settings.executor is None:
+        settings = replace(settings, jobs=worker_count(settings.jobs))
+    settings = replace(settings, law=law)
+    compile_run = _Run(file=str(file), root=root, targets=targets, n=n, seed=seed, options=settings,
+                       spec_digest=hashlib.sha256(data).hexdigest(), sources_digest=sources.hexdigest(),
+                       width=max(DEFAULT_WIDTH, len(str(max(n - 1, 0)))), scenes=scenes, sampler=sampler)
     try:
-        return _compile_locked(root, file, targets, n, seed, jobs, include_dirs, force, hashlib.sha256(data).hexdigest(),
-                               sources.hexdigest(), scenes, sampler, width, created, meshes_anywhere, executor, proposal, law)
+        first = _first_to_render(compile_run)
+        if first is not None:
+            _preflight(compile_run, first)
+        created = prepare_root(root, targets)
+        lock = lock_folder(root)
+        try:
+            return _compile_locked(compile_run, created)
+        finally:
+            lock.release()
     except PrscError as error:
         raise _at_object(error, program) from None
-    finally:
-        os.close(lock)
+
+
+def _job(run: _Run, root: Path) -> Job:
+    """The workers' job for this run, writing under `root`."""
+    return Job(spec=run.file, seed=run.seed, targets=run.targets, root=str(root), width=run.width, scenes=run.scenes,
+               include_dirs=run.options.include_dirs, sources=run.sources_digest,
+               meshes_anywhere=run.options.meshes_anywhere, law=run.options.law, proposal=run.options.proposal,
+               _sampler=run.sampler)
+
+
+def _first_to_render(run: _Run) -> int | None:
+    """The first scene this run will write (a re-run skips those its folder's manifest lists), or None."""
+    try:
+        manifest, entries = load_manifest(run.root)
+    except PrscError:
+        return 0 if run.n else None  # the run proper reports the manifest under the folder's lock
+    same = manifest is not None and (manifest.get("spec_sha256"), manifest.get("sources_sha256"),
+                                      manifest.get("seed")) == (run.spec_digest, run.sources_digest, run.seed)
+    done = entries if same else {}
+    return next((k for k in range(min(run.n, len(done) + 1)) if set(run.targets) - set(done.get(k, {}))), None)
+
+
+def _preflight(run: _Run, index: int) -> None:
+    """Render one scene in every target into a scratch folder outside the output, and discard
+    it: what fails for every scene (paths, names, limits) fails here, before any write."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="prsc-preflight-") as scratch:
+        root = Path(scratch) / run.root.name
+        prepare_root(root, run.targets)
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the run proper warns again, once
+                render_one(_job(run, root), index)
+        except PrscError as error:  # named where the run would have written
+            raise PrscError(error.message.replace(str(root), str(run.root)), error.span, error.notes,
+                            error.obj) from None
 
 
 def _at_object(error: PrscError, program: Any) -> PrscError:
@@ -284,29 +371,34 @@ def _at_object(error: PrscError, program: Any) -> PrscError:
     return error if decl is None else PrscError(error.message, decl.span, error.notes)
 
 
-def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int, jobs: int,
-                    include_dirs: Sequence[str], force: bool, digest: str, sources_digest: str, scenes: list[dict] | None,
-                    sampler: Callable[[int], dict] | None, width: int, created: Path | None,
-                    meshes_anywhere: bool, executor: Executor | None, proposal: dict | None = None,
-                    law: str | None = None) -> Path:
+def _undo_start(root: Path, created: list[Path], wrote_manifest: bool) -> None:
+    """Leave the folder as it was before a run that finished no scene: remove the manifest
+    this run wrote and the folders it created (everything in them is this run's)."""
+    if wrote_manifest:
+        (root / MANIFEST).unlink(missing_ok=True)
+    for folder in created:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _compile_locked(run: _Run, created: list[Path]) -> Path:
     """The part of compile_scenes that runs while this process holds the folder's lock."""
     from prsc.files import remove_stale_temporaries
 
+    root, targets, n, settings = run.root, run.targets, run.n, run.options
     remove_stale_temporaries(root, recursive=True)
     manifest, entries = load_manifest(root)
     if manifest is not None and (
-        manifest.get("spec_sha256") != digest or manifest.get("sources_sha256") != sources_digest
-        or manifest.get("seed") != seed
+        manifest.get("spec_sha256") != run.spec_digest or manifest.get("sources_sha256") != run.sources_digest
+        or manifest.get("seed") != run.seed
     ):
-        if entries and not force:
+        if entries and not settings.force:
             was = f"seed {manifest.get('seed')!r} of {manifest.get('spec', 'another spec')}"
             raise PrscError(f"{root} holds {len(entries)} scenes of another spec, imported file, seed, law or "
                             f"proposal ({was}); pass --force to replace them, or choose another output folder")
         remove_listed(root, entries)
         manifest, entries = None, {}
-    job = Job(spec=str(file), seed=seed, targets=tuple(targets), root=str(root), width=width, scenes=scenes,
-              include_dirs=tuple(include_dirs), sources=sources_digest, adopt_unlisted=manifest is not None,
-              meshes_anywhere=meshes_anywhere, law=law, proposal=proposal, _sampler=sampler)
+    had_manifest = (root / MANIFEST).exists()
+    job = replace(_job(run, root), adopt_unlisted=manifest is not None)
     listed = Listed({k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:
@@ -322,6 +414,7 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
     bar = progress_bar(total)
     task = bar.add_task("compile", total=total) if bar else None
     next_checkpoint = [time.monotonic() + CHECKPOINT_SECONDS]
+    spec = Path(run.file).absolute()
 
     def done(result: tuple[int, dict[str, str], list[str]]) -> None:
         index, files, messages = result
@@ -342,20 +435,23 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         return {
             "format": MANIFEST_FORMAT,
             "version": 1,
-            "spec": str(file),
-            "spec_sha256": digest,
-            "sources_sha256": sources_digest,
-            "seed": seed,
+            # Relative to this folder, so a moved dataset still finds its spec; and absolute.
+            "spec": os.path.relpath(spec, root.absolute()),
+            "spec_path": str(spec),
+            "spec_sha256": run.spec_digest,
+            "sources_sha256": run.sources_digest,
+            "seed": run.seed,
             "scenes": [{"index": k, "files": dict(sorted(entries[k].items()))} for k in sorted(entries) if entries[k]],
         }
 
     # Written first too: a re-run after an interruption then knows whose files these are.
     write_manifest(root, manifest_now())
+    executor = settings.executor
     try:
         if bar:
             bar.start()
         pending = iter(todo_list if todo_list is not None else todo())
-        executor = executor or LocalExecutor(jobs, start="fork")
+        executor = executor or LocalExecutor(settings.jobs, start="fork")
         if isinstance(executor, LocalExecutor) and executor.jobs > 1:
             # The first scene in this process warms the per-process caches (robot
             # fragments, converted assets) that the forked workers then inherit.
@@ -369,10 +465,10 @@ def _compile_locked(root: Path, file: str, targets: list[str], n: int, seed: int
         # Local workers have been stopped and joined (and this folder's lock keeps other runs
         # out), so no writer is left to lock a fresh temporary: remove them whatever their
         # age. Ray cancels its tasks without waiting, so there the usual age applies.
-        joined = executor is None or isinstance(executor, LocalExecutor)
+        joined = isinstance(executor, LocalExecutor)
         remove_stale_temporaries(root, recursive=True, **({"min_age": 0} if joined else {}))
-        if created is not None and not any(entries.values()) and not (root / JOURNAL).exists():
-            shutil.rmtree(created, ignore_errors=True)  # a failed first run leaves nothing behind
+        if not any(entries.values()) and not (root / JOURNAL).exists():
+            _undo_start(root, created, wrote_manifest=not had_manifest)  # a failed first run leaves nothing
             raise
         try:  # best effort: record the scenes that were completed (the journal keeps them otherwise)
             close_manifest(root, entries, manifest_now)
@@ -392,6 +488,7 @@ def run(args: argparse.Namespace) -> int:
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="fork")
     settle_targets(targets, args.settle_check)
-    root = compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs, args.include, executor,
-                          args.force, args.meshes_anywhere, read_proposal(args.proposal, args.file), args.law)
+    root = compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs=jobs, include_dirs=args.include,
+                          executor=executor, force=args.force, meshes_anywhere=args.meshes_anywhere,
+                          proposal=read_proposal(args.proposal, args.file), law=args.law)
     return settle_check(root, args.scenes, Path(args.file).suffix in (".json", ".jsonl")) if args.settle_check else 0

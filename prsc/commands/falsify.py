@@ -183,8 +183,10 @@ def run(args: argparse.Namespace) -> int:
                 check(scene)
         listing = out / "scenes" / f"round_{number:02d}.jsonl"
         atomic_write(listing, "".join(json.dumps(s, separators=(",", ":")) + "\n" for s in scenes))
-        root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs, args.include,
-                              make_executor(args.executor, jobs, args.address, start="fork"), force=args.force)
+        root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs=jobs,
+                              include_dirs=args.include,
+                              executor=make_executor(args.executor, jobs, args.address, start="fork"),
+                              force=args.force)
         mjcf = {index: xml for index, _, xml in compiled_scenes(root)}
         tasks = [EpisodeTask(start + k, scene, str(mjcf[k]), args.seed, controller_ref, args.max_sim_seconds)
                  for k, scene in enumerate(scenes)]

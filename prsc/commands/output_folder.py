@@ -9,6 +9,7 @@ manifest lists.
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
 import os
@@ -39,9 +40,15 @@ CHECKPOINT_SECONDS = 2.0  # manifest.json is rewritten at most this often during
 def record_file(root: Path, index: int, target: str, rel: str) -> None:
     """Append one finished file to the journal: a single O_APPEND write, so lines never interleave."""
     line = json.dumps({"index": index, "files": {target: rel}}, separators=(",", ":")) + "\n"
+    data = line.encode()
     handle = os.open(root / JOURNAL, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
-        os.write(handle, line.encode())
+        if os.write(handle, data) != len(data):  # a full disk (or file-size limit) cut the line
+            try:
+                os.write(handle, b"\n")  # end the cut line, so the next one starts clean; readers skip it
+            except OSError:
+                pass
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(root / JOURNAL))
     finally:
         os.close(handle)
 
@@ -55,32 +62,81 @@ def output_root(output: Path, path: Path) -> Path:
     return output / stem
 
 
-def prepare_root(root: Path, targets: Iterable[str]) -> None:
-    """Create `root/<target>/`, with clear errors for a broken or unwritable path."""
+def prepare_root(root: Path, targets: Iterable[str]) -> list[Path]:
+    """Create `root/<target>/` with clear errors for a broken or unwritable path; returns the
+    folders this call created, outermost first (a failed run removes them again)."""
+    created: list[Path] = []
     try:
         for folder in [root, root / "assets"] + [root / t for t in targets]:
             if folder.exists() and not folder.is_dir():
                 raise PrscError(f"output path {folder} exists and is not a folder")
+            missing = [p for p in (*reversed(folder.absolute().parents), folder.absolute()) if not p.exists()]
             folder.mkdir(parents=True, exist_ok=True)
+            created.extend(missing)
         if not os.access(root, os.W_OK):
             raise PrscError(f"cannot write to output folder {root}: permission denied")
     except OSError as error:
         raise PrscError(f"cannot create output folder {error.filename or root}: {os.strerror(error.errno) if error.errno else error}") from None
+    return created
 
 
-def lock_folder(root: Path) -> int:
-    """An exclusive lock on the output folder for this run (released when the process and its workers end)."""
-    try:
-        handle = os.open(root / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError as error:
-        raise write_error(error, root / LOCK) from None
-    try:
-        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except OSError:
-        os.close(handle)
-        raise PrscError(f"output folder {root} is being written by another prsc run; "
-                        "wait for it to finish or choose another output folder") from None
-    return handle
+LOCK_MARK = b"prsc output-folder lock\n"  # what prsc writes in a lock file it creates: its proof of authorship
+
+
+@dataclass(frozen=True)
+class FolderLock:
+    """An exclusive lock on an output folder; `release` removes the lock file when prsc wrote it."""
+
+    handle: int
+    path: Path
+    ours: bool
+
+    def release(self) -> None:
+        """Unlink the lock file (only prsc's own) while still holding it, then close it."""
+        try:
+            if self.ours:
+                self.path.unlink(missing_ok=True)
+        except OSError:
+            pass  # a folder that refuses the unlink keeps an empty lock file: harmless, and the run's own error matters
+        finally:
+            os.close(self.handle)
+
+
+def lock_folder(root: Path) -> FolderLock:
+    """An exclusive lock on the output folder for this run (released when the process and its workers end).
+
+    A run that holds the lock removes its file when it ends, so a second run may have opened
+    the old file just before: after locking, the lock must still be the file at the path."""
+    path = root / LOCK
+    while True:
+        try:
+            try:
+                handle, created = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644), True
+            except FileExistsError:
+                handle, created = os.open(path, os.O_RDWR), False
+        except FileNotFoundError:
+            continue  # removed between the two opens by the run that held it: try again
+        except OSError as error:
+            raise write_error(error, path) from None
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(handle)
+            raise PrscError(f"output folder {root} is being written by another prsc run; "
+                            "wait for it to finish or choose another output folder") from None
+        try:
+            current = os.stat(path).st_ino
+        except FileNotFoundError:
+            current = None
+        if current != os.fstat(handle).st_ino:
+            os.close(handle)  # the run before us removed this file after we opened it
+            continue
+        # Ours: created just now, or left by a prsc run that was killed (it holds the mark).
+        # An empty lock file of an older prsc cannot be told from a user's file: it stays.
+        ours = created or os.read(handle, len(LOCK_MARK) + 1) == LOCK_MARK
+        if created:
+            os.write(handle, LOCK_MARK)
+        return FolderLock(handle, path, ours)
 
 
 def _entry_files(root: Path, entry: Any, where: str) -> tuple[int, dict[str, str]]:
@@ -144,7 +200,7 @@ def _absorb_journal(root: Path, entries: dict[int, dict[str, str]]) -> None:
         try:
             entry = json.loads(line)
         except ValueError:
-            entry = None
+            continue  # cut by a full disk (its file was removed): listing less never deletes more
         index, files = _entry_files(root, entry, f"{JOURNAL} line {number}")
         entries.setdefault(index, {}).update(files)
 

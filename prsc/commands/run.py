@@ -188,8 +188,8 @@ def run(args: argparse.Namespace) -> int:
     # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
     is_json = source.suffix in (".json", ".jsonl")
     count = args.n if args.n is not None else (0 if is_json else 10)
-    root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs, args.include,
-                          make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
+    root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs=jobs, include_dirs=args.include,
+                          executor=make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
                           proposal=proposal, law=args.law)
     from prsc.commands.compile import MANIFEST
 

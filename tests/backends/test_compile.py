@@ -49,10 +49,12 @@ def test_layout_and_manifest(tmp_path):
     root = compile_scenes(str(source), ALL, 3, 7, str(tmp_path / "out"))
     assert root == tmp_path / "out" / "scenes"
     manifest = json.loads((root / "manifest.json").read_text())
-    assert manifest["seed"] == 7 and manifest["spec"] == str(source)
+    assert manifest["seed"] == 7 and manifest["spec_path"] == str(source.absolute()) \
+        and (root / manifest["spec"]).resolve() == source.resolve()
     import hashlib
 
     assert manifest["spec_sha256"] == hashlib.sha256(source.read_bytes()).hexdigest()
+    assert not (root / ".prsc-lock").exists()  # the run's lock file goes with the run
     assert [s["index"] for s in manifest["scenes"]] == [0, 1, 2]
     assert manifest["scenes"][2]["files"] == {
         "json": "json/00002.json", "mjcf": "mjcf/00002.xml", "sdf": "sdf/00002.sdf",
@@ -81,7 +83,9 @@ def test_rerun_skips_scenes_already_written(tmp_path, monkeypatch):
     original = prsc.backends.mjcf.render
     monkeypatch.setattr(prsc.backends.mjcf, "render", lambda *a: calls.append(a[0].index) or original(*a))
     compile_scenes(str(source), ["mjcf", "json"], 3, 0, str(tmp_path / "out"))
-    assert calls == [2]  # only the new scene is rendered
+    # Only the new scene is rendered: once in a scratch folder before the output folder is
+    # touched (its errors are found before any write), once in place.
+    assert calls == [2, 2]
     assert all(p.stat().st_mtime_ns == t for p, t in before.items())
     manifest = json.loads((root / "manifest.json").read_text())
     assert [s["index"] for s in manifest["scenes"]] == [0, 1, 2]

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import subprocess
+
+import pytest
 import sys
 from pathlib import Path
 
@@ -65,9 +67,41 @@ def test_missing_file_and_directory(tmp_path, capsys):
     assert "cannot read" in err and "is a directory" in err
 
 
-def test_check_does_not_import_numeric_libraries():
+def test_check_does_not_import_simulators():
+    """check compiles as far as compile does before sampling (numpy, scipy), but loads no simulator."""
     code = ("import sys; from prsc.cli import main; rc = main(['check', '-q', 'specs/table_cube.prs']);"
-            "heavy = [m for m in ('numpy', 'scipy', 'mujoco', 'pxr', 'pybullet') if m in sys.modules];"
+            "heavy = [m for m in ('mujoco', 'pxr', 'pybullet', 'trimesh') if m in sys.modules];"
             "print(rc, heavy)")
     result = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "0 []"
+
+
+NOT_A_CONTAINER = """from tabletop import *
+table = Table on Vector3D(0, 0, 0)
+block = Cube completely on table
+c = Cube completely in block
+"""
+UNREADABLE_MESH = """class Thing(Object):
+    mesh: "notamesh.obj"
+a = Thing at Vector3D(0, 1, 1)
+"""
+LONG_NAME = "x" * 300 + " = Object at Vector3D(0, 1, 1)\n"
+
+
+@pytest.mark.parametrize("source, line, col, words", [
+    (NOT_A_CONTAINER, 4, 10, "needs a container"),
+    (UNREADABLE_MESH, 2, 11, "notamesh.obj"),
+    (LONG_NAME, 1, 1, "file systems allow 255"),
+], ids=["not-a-container", "unreadable-mesh", "name-too-long"])
+def test_check_finds_what_compile_finds_at_the_line_of_the_cause(tmp_path, capsys, source, line, col, words):
+    """Issue 23: each of these passed `check` and then failed `compile`; now both say the same, at the same line."""
+    (tmp_path / "notamesh.obj").write_text("not a mesh\n")
+    spec = tmp_path / "s.prs"
+    spec.write_text(source)
+    assert main(["check", "-q", str(spec)]) == 2
+    checked = capsys.readouterr().err
+    assert checked.startswith(f"{spec}:{line}:{col}: error: ") and words in checked and "^" in checked
+    out = tmp_path / "out"
+    assert main(["compile", str(spec), "--target", "json,mjcf,urdf", "-o", str(out)]) == 2
+    assert capsys.readouterr().err.splitlines()[0] == checked.splitlines()[0]
+    assert not out.exists()
