@@ -22,8 +22,8 @@ MATH = "math"
 
 
 def library_dir() -> Path:
-    """prsc's own model library: specs/ next to the package."""
-    return Path(prsc.__file__).resolve().parent.parent / "specs"
+    """prsc's own model library: the package data in prsc/library (tabletop.prs), installed with prsc."""
+    return Path(prsc.__file__).resolve().parent / "library"
 
 
 @dataclass

@@ -43,7 +43,8 @@ def all_exprs(program: Program):
         yield from walk(r.condition)
 
 
-@pytest.mark.parametrize("path", original_params() + sorted((REPO / "specs").glob("*.prs")),
+@pytest.mark.parametrize("path", original_params() + sorted((REPO / "specs").glob("*.prs"))
+                         + sorted((REPO / "prsc" / "library").glob("*.prs")),
                          ids=lambda p: p.name)
 def test_shipped_specs_compile(path):
     program = compile_program(str(path))

@@ -21,7 +21,8 @@ def one(source: str) -> n.Statement:
     return module.statements[0]
 
 
-@pytest.mark.parametrize("path", original_params() + sorted(SPECS.glob("*.prs")), ids=lambda p: p.name)
+@pytest.mark.parametrize("path", original_params() + sorted(SPECS.glob("*.prs"))
+                         + sorted((SPECS.parent / "prsc" / "library").glob("*.prs")), ids=lambda p: p.name)
 def test_every_shipped_spec_parses(path):
     module = parse_file(path)
     assert module.statements
