@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from prsc.commands.executors import add_executor_arguments
+from prsc.commands.tables import print_table
 from prsc.constraints.model import COLLISION
 from prsc.errors import PrscError
 
@@ -209,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
     atomic_write(out / "proposal.json", json.dumps(proposal.to_json(), indent=1) + "\n")
     table = write_report(records, proposal, masses, out, f"{source.name}: falsify ({args.method}), "
                          f"budget {args.budget}, seed {args.seed}", declared)
-    Console().print(table)
+    print_table(table)
     console.print(f"results in {out / 'results.jsonl'}; proposal in {out / 'proposal.json'}")
     sys.stdout.flush()
     return 0

@@ -234,6 +234,7 @@ def run(args: argparse.Namespace) -> int:
 
     title = f"{source.name}: {len(ordered)} episodes, seed {args.seed}"
     from prsc.backends.runner.report import plot_outcomes, summary_table
+    from prsc.commands.tables import print_table
 
     plot_outcomes(ordered, out / "outcomes.png", title, declared)
     report = getattr(controller, "report", None)
@@ -241,7 +242,7 @@ def run(args: argparse.Namespace) -> int:
         report(ordered, [scene for scene, _ in pairs], out, title)
     _write_strips(tasks, ordered, out, args.video)
 
-    Console().print(summary_table(ordered, title, declared))
+    print_table(summary_table(ordered, title, declared))
     episodes = f"{len(todo)} episodes {finished_at - compiled:.1f} s"
     if todo and args.executor == "local":
         episodes += f", {cpu_used / len(todo):.2f} CPU s each"

@@ -105,3 +105,4 @@ def test_check_finds_what_compile_finds_at_the_line_of_the_cause(tmp_path, capsy
     assert main(["compile", str(spec), "--target", "json,mjcf,urdf", "-o", str(out)]) == 2
     assert capsys.readouterr().err.splitlines()[0] == checked.splitlines()[0]
     assert not out.exists()
+
