@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Iterable
 
 import mujoco
 import numpy as np
@@ -128,21 +128,9 @@ def settle_scene(raw: dict, mjcf: Path, index: int = 0, seconds: float = SECONDS
     return SceneRest(index, largest, tuple(drifts))
 
 
-def compiled_scenes(root: Path, indices: Iterable[int] | None = None) -> list[tuple[int, Path, Path]]:
-    """(index, scene JSON, MJCF) of the scenes an output folder's manifest lists with both files."""
-    manifest: dict[str, Any] = json.loads((root / "manifest.json").read_text())
-    wanted = None if indices is None else set(indices)
-    out = []
-    for entry in manifest.get("scenes", []):
-        files = entry.get("files", {})
-        if "json" in files and "mjcf" in files and (wanted is None or entry["index"] in wanted):
-            out.append((int(entry["index"]), root / files["json"], root / files["mjcf"]))
-    return sorted(out)
-
-
-def settle_folder(root: Path, indices: Iterable[int] | None = None, limit: float = LIMIT) -> list[SceneRest]:
-    """The settle check of every compiled scene in an output folder (those of `indices`)."""
-    return [settle_scene(json.loads(js.read_text()), xml, index, limit=limit) for index, js, xml in compiled_scenes(root, indices)]
+def settle_scenes(scenes: Iterable[tuple[int, Path, Path]], limit: float = LIMIT) -> list[SceneRest]:
+    """The settle check of compiled scenes, each given as (index, scene JSON file, MJCF file)."""
+    return [settle_scene(json.loads(js.read_text()), xml, index, limit=limit) for index, js, xml in scenes]
 
 
 def report_lines(results: list[SceneRest], limit: float = LIMIT) -> list[str]:

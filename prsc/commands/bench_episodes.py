@@ -50,7 +50,7 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
     from prsc.backends.runner import harness, rendering
     from prsc.backends.runner.controller import parse_target
     from prsc.backends.runner.tasks import EpisodeTask
-    from prsc.backends.settle_check import compiled_scenes
+    from prsc.commands.output_folder import compiled_scenes
     from prsc.commands.compile import compile_scenes
 
     with tempfile.TemporaryDirectory(prefix="prsc-run-bench-") as tmp:

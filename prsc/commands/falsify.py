@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
     from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
     from prsc.backends.runner.tasks import EpisodeTask
     from prsc.backends.runner.worker import WorkerConfig, run_task
-    from prsc.backends.settle_check import compiled_scenes
+    from prsc.commands.output_folder import compiled_scenes
     from prsc.commands.compile import compile_scenes
     from prsc.commands.executors import make_executor, worker_count
     from prsc.commands.falsify_report import write_report

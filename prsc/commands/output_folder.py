@@ -240,6 +240,14 @@ def close_manifest(root: Path, entries: dict[int, dict[str, str]], manifest_now:
     (root / JOURNAL).unlink(missing_ok=True)  # manifest.json now holds every line of it
 
 
+def compiled_scenes(root: Path, indices: Iterable[int] | None = None) -> list[tuple[int, Path, Path]]:
+    """(index, scene JSON, MJCF) of the scenes an output folder's manifest lists with both files."""
+    _, entries = load_manifest(root)
+    wanted = None if indices is None else set(indices)
+    return sorted((index, root / files["json"], root / files["mjcf"]) for index, files in entries.items()
+                  if "json" in files and "mjcf" in files and (wanted is None or index in wanted))
+
+
 @dataclass
 class Listed:
     """Whether the manifest lists a scene's file for a target (picklable, for the workers)."""

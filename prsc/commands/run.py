@@ -71,7 +71,7 @@ def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: S
 
 def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
     """(scene, MJCF path) of every compiled scene of the folder's manifest, in index order."""
-    from prsc.backends.settle_check import compiled_scenes
+    from prsc.commands.output_folder import compiled_scenes
 
     return [(json.loads(scene.read_text(encoding="utf-8")), mjcf)
             for _, scene, mjcf in compiled_scenes(root, range(count) if count else None)]

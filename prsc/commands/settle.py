@@ -22,10 +22,11 @@ def settle_check(root: Path, scenes: int | None, scene_input: bool) -> int:
     scene of a scene-JSON input when not given)."""
     from rich.console import Console
 
-    from prsc.backends.settle_check import report_lines, settle_folder
+    from prsc.backends.settle_check import report_lines, settle_scenes
+    from prsc.commands.output_folder import compiled_scenes
 
     indices = range(scenes if scenes else 1) if not scene_input or scenes else None
-    results = settle_folder(root, indices)
+    results = settle_scenes(compiled_scenes(root, indices))
     console = Console(highlight=False, soft_wrap=True)
     for line in report_lines(results):
         console.print(line, markup=False)

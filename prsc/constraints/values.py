@@ -8,7 +8,7 @@ world coordinates). Objects, face points and regions have the classes below.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,8 +16,9 @@ from numpy.typing import NDArray
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope
 
-if TYPE_CHECKING:
-    from prsc.constraints.context import SceneContext
+# A property function takes the scene context (context.py, which holds ObjectValues and so
+# sits above this module): typed by what it is, not by importing it.
+SceneContext = Any
 
 Vector = NDArray[np.float64]
 

@@ -12,7 +12,8 @@ from prsc.ir.program import ClassDef, ObjectDecl, Param, Program, Require, SelfR
 from prsc.ir.builtins import (BUILTIN_SPAN, MATH_CONSTANTS, OBJECT_DEFAULTS, PROPERTY_TYPES, ROOT_CLASS,
                               SPECIFIER_PROPERTIES)
 from prsc.ir.checks import check_values, constant_number
-from prsc.ir.expressions import DrawIds, ExprResolver, article, expect, type_words
+from prsc.ir.expressions import DrawIds, ExprResolver
+from prsc.ir.type_checks import article, expect, type_words
 from prsc.ir.imports import MATH, ModuleGraph, load_module_graph
 from prsc.ir.loops import LoopStatements, bound_names, iteration_name
 from prsc.ir.mesh_sizes import with_mesh_sizes

@@ -2,15 +2,25 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from prsc.errors import PrscError
 from prsc.ir import model as ir
-from prsc.ir.expressions import POINT_TYPES, article, expect
+from prsc.ir.type_checks import POINT_TYPES, article, expect
 from prsc.syntax import nodes
 
-if TYPE_CHECKING:
-    from prsc.ir.expressions import ExprResolver
+
+class DrawCounter(Protocol):
+    def take(self) -> int: ...
+
+
+class ExprResolver(Protocol):
+    """What a constructor needs of the expression resolver (expressions.py), which calls it:
+    named here as an interface so that this module sits below expressions.py."""
+
+    draws: DrawCounter
+
+    def resolve(self, e: nodes.Expr) -> ir.Expr: ...
 
 T = ir.Type
 NUMBER = {T.SCALAR}

@@ -13,43 +13,16 @@ from prsc.ir.builtins import (CONSTRUCTORS, FACE_WORD_GROUPS, FUNCTIONS, MATH_CO
                               SPECIFIER_PROPERTIES)
 from prsc.ir.scope import (ClassInfo, ConstantInfo, LoopNames, MathModule, ObjectInfo, Scope, SpecModule,
                            VariableInfo, describe, did_you_mean)
+from prsc.ir.constructors import construct
+from prsc.ir.type_checks import LOCATED_TYPES, POINT_TYPES, article, expect
 from prsc.syntax import nodes
 
 T = ir.Type
-POINT_TYPES = frozenset({T.VECTOR, T.ORIENTED_POINT})
-LOCATED_TYPES = frozenset({T.OBJECT, T.VECTOR, T.ORIENTED_POINT})
-
-
 def declared_surfaces(cls: ClassInfo) -> tuple[str, ...]:
     """The support-surface lists a class declares: `surfaces: ["boards"]` (constant strings)."""
     default = cls.default("surfaces")
     items = default.items if isinstance(default, ir.ListExpr) else (default,) if default is not None else ()
     return tuple(str(i.value) for i in items if isinstance(i, ir.Const) and i.type == T.STRING)
-
-
-def type_words(types) -> str:
-    """A set of types in words: 'a vector or an object'."""
-    words = []
-    for t in sorted(types, key=lambda t: t.value):
-        if t == T.ANY:
-            continue
-        article = "an" if t.value[0] in "aeiou" else "a"
-        words.append(f"{article} {t.value}")
-    if not words:
-        return "anything"
-    return ", ".join(words[:-1]) + (" or " if len(words) > 1 else "") + words[-1]
-
-
-def article(t: ir.Type) -> str:
-    """'a scalar', 'an object'."""
-    return ("an " if t.value[0] in "aeiou" else "a ") + t.value
-
-
-def expect(expr: ir.Expr, types, what: str) -> ir.Expr:
-    """expr itself when its type is one of types (or ANY); else a type error at its span."""
-    if expr.type == T.ANY or expr.type in types:
-        return expr
-    raise PrscError(f"{what} must be {type_words(types)}, not {article(expr.type)}", expr.span)
 
 
 @dataclass
@@ -221,8 +194,6 @@ class ExprResolver:
         if name in FUNCTIONS:
             return self._function(name, e)
         if name in CONSTRUCTORS:
-            from prsc.ir.constructors import construct  # one module per concept
-
             return construct(self, name, e)
         binding = self.scope.names.get(name)
         if isinstance(binding, ClassInfo):

@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
-import prsc
 from prsc.errors import PrscError
 from prsc.ir.builtins import PYTHON_MODULES
 from prsc.syntax import nodes, parse_file
@@ -23,7 +22,7 @@ MATH = "math"
 
 def library_dir() -> Path:
     """prsc's own model library: the package data in prsc/library (tabletop.prs), installed with prsc."""
-    return Path(prsc.__file__).resolve().parent / "library"
+    return Path(__file__).resolve().parents[1] / "library"
 
 
 @dataclass

@@ -7,7 +7,8 @@ import dataclasses
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import AXES, BOX_READS, DIRECTION_PHRASES
-from prsc.ir.expressions import LOCATED_TYPES, POINT_TYPES, ExprResolver, article, expect, type_words
+from prsc.ir.expressions import ExprResolver
+from prsc.ir.type_checks import LOCATED_TYPES, POINT_TYPES, article, expect, type_words
 from prsc.ir.scope import ClassInfo, VariableInfo, did_you_mean
 from prsc.syntax import nodes
 

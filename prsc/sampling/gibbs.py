@@ -25,21 +25,35 @@ the others), so they keep the sequential sampler's speed.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
+from prsc.constraints.model import RequireCheck
 from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.geometry.exceptions import EmptyRegionError
 from prsc.sampling.attempt import Attempt
 from prsc.geometry.free_space import free_space_sampler
+from prsc.geometry.polytope import Polytope
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, near, obstacles_for
 from prsc.sampling.regions import Prepared, violated_rule
 from prsc.sampling.runtime import ObjectRuntime
 
-if TYPE_CHECKING:
-    from prsc.sampling.engine import SequentialSampler
+
+
+class SweptEngine(Protocol):
+    """What Gibbs sweeps read of the sequential engine (engine.py), which owns and runs them:
+    an interface stated here, so that this module sits below the engine and names nothing of it."""
+
+    runtimes: list[ObjectRuntime]
+    reads: list[set[int]]  # per object: the earlier objects its rows read
+    checks: list[tuple[RequireCheck, ...]]  # per object: the requires tested once it is placed
+    movable: list[bool]  # per object: whether re-placing it can change anything
+    index_of: dict[str, int]  # object name -> its index
+
+    def draw_position(self, rt: ObjectRuntime, obj: ObjectValue, half: np.ndarray, region: Prepared,
+                      shift: np.ndarray | None, excluded: list[Polytope], run: Attempt) -> bool: ...
 
 # Sweeps per scene, chosen from the mixing measurement in docs/sampling.md ("How many
 # sweeps"): on the cups the law reaches the exact joint value within noise after 3 sweeps.
@@ -67,7 +81,7 @@ def _support(rt: ObjectRuntime, rotation: np.ndarray | None, half: np.ndarray) -
 class GibbsSweeps:
     """Metropolis-within-Gibbs updates of a complete scene, in place, for one engine."""
 
-    def __init__(self, engine: SequentialSampler, sweeps: int = DEFAULT_SWEEPS) -> None:
+    def __init__(self, engine: SweptEngine, sweeps: int = DEFAULT_SWEEPS) -> None:
         self.engine = engine
         self.sweeps = int(sweeps)
         runtimes = engine.runtimes

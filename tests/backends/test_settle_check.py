@@ -10,7 +10,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from prsc.backends.settle_check import LIMIT, settle_folder
+from prsc.backends.settle_check import LIMIT, settle_scenes
+from prsc.commands.output_folder import compiled_scenes
 from prsc.cli import main
 from prsc.commands.compile import compile_scenes
 from prsc.ir import compile_program, model as ir
@@ -37,7 +38,7 @@ def test_every_completely_on_object_of_every_spec_is_at_rest(tmp_path, spec):
     names = completely_on(spec)
     assert names, f"{spec.name} places nothing `completely on`: the test would check nothing"
     root = compile_scenes(str(spec), ["json", "mjcf"], 10, 0, str(tmp_path / "out"))
-    results = settle_folder(root)
+    results = settle_scenes(compiled_scenes(root))
     assert len(results) == 10
     moved = [(r.index, d.name, round(d.distance * 1000, 1), d.cause) for r in results for d in r.drifts if d.name in names]
     assert not moved, moved
@@ -107,7 +108,7 @@ def test_the_settle_check_lists_a_cube_tipping_over_a_wall(tmp_path):
     # The naive spec places the cube with a bare `on`: its centre inside the walls, its
     # footprint sometimes across one. Scene 1 of seed 0 is such a scene.
     root = compile_scenes(str(REPO / "specs" / "table_cube_naive.prs"), ["json", "mjcf"], 2, 0, str(tmp_path / "out"))
-    results = settle_folder(root)
+    results = settle_scenes(compiled_scenes(root))
     tipped = [d for r in results for d in r.drifts]
     assert tipped and all(d.name == "c1" and "across a wall of tr_1" in d.cause and d.distance > LIMIT for d in tipped)
     assert all(r.largest < LIMIT for r in results if not r.drifts)
