@@ -98,6 +98,7 @@ class CompileOptions:
     meshes_anywhere: bool = False  # meshes may come from any folder
     proposal: dict | None = None  # draw from a falsify proposal
     law: str | None = None  # --law
+    compiled: Any = None  # the spec's Sampler, when the caller compiled it already (with these options)
 
 
 @dataclass(frozen=True)
@@ -159,8 +160,8 @@ def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, 
         # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
         from prsc.commands.static_checks import compile_checked
 
-        compiled = compile_checked(str(file), settings.include_dirs, law=law,
-                                   proposal=proposal_from_json(settings.proposal))
+        compiled = settings.compiled or compile_checked(str(file), settings.include_dirs, law=law,
+                                                        proposal=proposal_from_json(settings.proposal))
         law = compiled.law
         program = compiled.program
         sampler = functools.partial(compiled.scene, seed)

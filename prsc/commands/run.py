@@ -18,7 +18,7 @@ import json
 import sys
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
 
 from prsc.commands.executors import add_executor_arguments, cpu_seconds
 from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, read_proposal
@@ -59,14 +59,14 @@ def add_parser(subparsers) -> None:
                         help="replace the scenes of another spec, imported file, seed, law or proposal in the output folder (only files prsc listed)")
 
 
-def _scenes_to_check(source: Path, count: int | None, seed: int, include_dirs: Sequence[str]) -> list[dict]:
+def _scenes_to_check(source: Path, count: int | None, seed: int, compiled: Any) -> list[dict]:
     """The scenes a controller's `check` sees before anything is written: every scene of a JSON
     input, the first of a spec (all scenes of a spec have the same objects and classes)."""
-    from prsc.commands.scene_sources import read_scene_file, spec_sampler
+    from prsc.commands.scene_sources import read_scene_file
 
-    if source.suffix in (".json", ".jsonl"):
+    if compiled is None:
         return read_scene_file(source)[:count or None]
-    return [spec_sampler(str(source), seed, include_dirs)(0)]
+    return [compiled.scene(seed=seed, index=0)]
 
 
 def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
@@ -169,6 +169,8 @@ def run(args: argparse.Namespace) -> int:
     from prsc.backends.runner.tasks import EpisodeTask
     from prsc.backends.runner.worker import WorkerConfig, run_task
     from prsc.commands.compile import compile_scenes
+    from prsc.commands.scene_sources import proposal_from_json
+    from prsc.commands.static_checks import compile_checked
     from prsc.commands.executors import make_executor, worker_count
 
     source = Path(args.file)
@@ -178,25 +180,28 @@ def run(args: argparse.Namespace) -> int:
     declared = declared_outcomes(controller)
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="spawn")
+    is_json = source.suffix in (".json", ".jsonl")
+    # The spec is compiled once, here: the scenes checked below and those written are its.
+    compiled = None if is_json else compile_checked(str(source), args.include, law=args.law,
+                                                   proposal=proposal_from_json(proposal))
     check = getattr(controller, "check", None)
     if check is not None:
-        for scene in _scenes_to_check(source, args.n, args.seed, args.include):
-            check(scene)  # before anything is compiled or written
+        for scene in _scenes_to_check(source, args.n, args.seed, compiled):
+            check(scene)  # before anything is written
     console = Console(stderr=True)
     out = args.output or Path("out") / f"run-{source.stem}"
     started = time.perf_counter()
     # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
-    is_json = source.suffix in (".json", ".jsonl")
     count = args.n if args.n is not None else (0 if is_json else 10)
     root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs=jobs, include_dirs=args.include,
                           executor=make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
-                          proposal=proposal, law=args.law)
+                          proposal=proposal, law=args.law, compiled=compiled)
     from prsc.commands.compile import MANIFEST
 
     manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
     pairs = _compiled(root, count)
-    if check is not None and not is_json:  # a JSON input's scenes were all checked above
-        for scene, _ in pairs:
+    if check is not None and not is_json:  # a JSON input's scenes, and scene 0 of a spec, were checked above
+        for scene, _ in pairs[1:]:
             check(scene)
     tasks = [EpisodeTask(k, scene, str(mjcf), int(scene.get("seed", args.seed)), controller_ref, args.max_sim_seconds)
              for k, (scene, mjcf) in enumerate(pairs)]

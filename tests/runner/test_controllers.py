@@ -194,3 +194,29 @@ def test_a_controller_finds_objects_whose_names_the_formats_cannot_hold(tmp_path
     lines = records(out / "results.jsonl")
     assert [r["outcome"] for r in lines] == ["found", "found"], lines
     assert lines[0]["bodies"] == {"table": "table", "world": "world_"}
+
+
+def test_run_compiles_the_spec_once_and_checks_each_scene_once(tmp_path, monkeypatch):
+    """Issue 23: `run` compiled the spec twice (once for `check`, once to write) and checked
+    scene 0 twice; the scenes checked are now those written, from one compile."""
+    import prsc.ir
+
+    compiles = []
+    real = prsc.ir.compile_program
+    monkeypatch.setattr(prsc.ir, "compile_program", lambda *a, **k: compiles.append(a[0]) or real(*a, **k))
+    checked = tmp_path / "checked.txt"
+    controller = tmp_path / "counting.py"
+    controller.write_text(textwrap.dedent(f'''
+        def counting(scene, model, data):
+            return {{"outcome": "success", "reason": "counted"}}
+
+        def check(scene):
+            with open({str(checked)!r}, "a") as f:
+                f.write(str(scene["index"]) + "\\n")
+
+        counting.check = check
+    '''))
+    out = tmp_path / "run"
+    assert main(["run", str(CUBES), "-n", "3", "-o", str(out), "--controller", f"{controller}:counting"]) == 0
+    assert compiles == [str(CUBES)]
+    assert sorted(checked.read_text().split()) == ["0", "1", "2"]
