@@ -99,6 +99,7 @@ class CompileOptions:
     proposal: dict | None = None  # draw from a falsify proposal
     law: str | None = None  # --law
     compiled: Any = None  # the spec's Sampler, when the caller compiled it already (with these options)
+    assets_dir: str | None = None  # shared files go here, not to <root>/assets (outputs refer to them relatively)
 
 
 @dataclass(frozen=True)
@@ -183,7 +184,7 @@ def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, 
         first = _first_to_render(compile_run)
         if first is not None:
             _preflight(compile_run, first)
-        created = prepare_root(root, targets)
+        created = prepare_root(root, targets, settings.assets_dir)
         lock = lock_folder(root)
         try:
             return _compile_locked(compile_run, created)
@@ -193,12 +194,12 @@ def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, 
         raise _at_object(error, program) from None
 
 
-def _job(run: _Run, root: Path) -> Job:
-    """The workers' job for this run, writing under `root`."""
+def _job(run: _Run, root: Path, assets: str | None) -> Job:
+    """The workers' job for this run, writing under `root` (shared files in `assets`, default root/assets)."""
     return Job(spec=run.file, seed=run.seed, targets=run.targets, root=str(root), width=run.width, scenes=run.scenes,
                include_dirs=run.options.include_dirs, sources=run.sources_digest,
                meshes_anywhere=run.options.meshes_anywhere, law=run.options.law, proposal=run.options.proposal,
-               _sampler=run.sampler)
+               assets=assets, _sampler=run.sampler)
 
 
 def _first_to_render(run: _Run) -> int | None:
@@ -224,7 +225,7 @@ def _preflight(run: _Run, index: int) -> None:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # the run proper warns again, once
-                render_one(_job(run, root), index)
+                render_one(_job(run, root, None), index)
         except PrscError as error:  # named where the run would have written
             raise PrscError(error.message.replace(str(root), str(run.root)), error.span, error.notes,
                             error.obj) from None
@@ -265,7 +266,7 @@ def _compile_locked(run: _Run, created: list[Path]) -> Path:
         remove_listed(root, entries)
         manifest, entries = None, {}
     had_manifest = (root / MANIFEST).exists()
-    job = replace(_job(run, root), adopt_unlisted=manifest is not None)
+    job = replace(_job(run, root, settings.assets_dir), adopt_unlisted=manifest is not None)
     listed = Listed({k: dict(v) for k, v in entries.items()})
 
     def todo() -> Iterable[int]:

@@ -187,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
         root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs=jobs,
                               include_dirs=args.include,
                               executor=make_executor(args.executor, jobs, args.address, start="fork"),
-                              force=args.force)
+                              force=args.force, assets_dir=str(out / "assets"))
         mjcf = {index: xml for index, _, xml in compiled_scenes(root)}
         tasks = [EpisodeTask(start + k, scene, str(mjcf[k]), args.seed, controller_ref, args.max_sim_seconds)
                  for k, scene in enumerate(scenes)]

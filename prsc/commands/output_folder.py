@@ -62,12 +62,13 @@ def output_root(output: Path, path: Path) -> Path:
     return output / stem
 
 
-def prepare_root(root: Path, targets: Iterable[str]) -> list[Path]:
-    """Create `root/<target>/` with clear errors for a broken or unwritable path; returns the
-    folders this call created, outermost first (a failed run removes them again)."""
+def prepare_root(root: Path, targets: Iterable[str], assets: str | None = None) -> list[Path]:
+    """Create `root/<target>/` and the assets folder (default `root/assets`) with clear errors for a
+    broken or unwritable path; returns the folders this call created, outermost first (a failed
+    run removes them again)."""
     created: list[Path] = []
     try:
-        for folder in [root, root / "assets"] + [root / t for t in targets]:
+        for folder in [root, Path(assets) if assets else root / "assets"] + [root / t for t in targets]:
             if folder.exists() and not folder.is_dir():
                 raise PrscError(f"output path {folder} exists and is not a folder")
             missing = [p for p in (*reversed(folder.absolute().parents), folder.absolute()) if not p.exists()]

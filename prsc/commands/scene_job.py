@@ -36,6 +36,7 @@ class Job:
     meshes_anywhere: bool = False  # --meshes-anywhere
     law: str | None = None  # --law: the law a worker compiling the spec again samples
     proposal: dict | None = None  # --proposal: a falsification proposal's JSON (prsc/sampling/proposal.py)
+    assets: str | None = None  # the shared files' folder, when not `root/assets` (falsify's rounds share one)
     _sampler: Callable[[int], dict] | None = field(default=None, repr=False)
 
     def scene(self, index: int) -> dict:
@@ -73,7 +74,7 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
     from prsc.files import atomic_write, atomic_write_tree
 
     root = Path(job.root)
-    store = AssetStore(root / "assets", job.include_dirs, job.meshes_anywhere)
+    store = AssetStore(Path(job.assets) if job.assets else root / "assets", job.include_dirs, job.meshes_anywhere)
     files: dict[str, str] = {}
     missing = []
     for target in job.targets:

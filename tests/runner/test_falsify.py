@@ -31,6 +31,8 @@ def test_falsify_writes_every_output_and_is_deterministic_under_jobs(tmp_path, c
     assert (one / "proposal.json").read_bytes() == (two / "proposal.json").read_bytes()
     assert [r["index"] for r in records] == list(range(8))
     assert [r["round"] for r in records] == [0] * 4 + [1] * 4
+    # One assets folder for the campaign: the rounds' MJCF files refer to it, none holds its own.
+    assert (one / "assets").is_dir() and not list(one.glob("round_*/assets"))
     assert all(r["law"] == "sequential" and r["weight"] > 0 for r in records)
     assert [r["weight"] for r in records[:4]] == pytest.approx([1.0] * 4)  # round 0 is the spec's own law
     assert sum(r["outcome"] == "corner" for r in records) >= 3  # seed 11's round 0 puts 3 of 4 cubes there
