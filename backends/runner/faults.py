@@ -11,6 +11,6 @@ class InfrastructureError(PrscError):
 
 
 class SimulationTimeLimit(BaseException):
-    """Raised from inside `mj_step` when an episode passes its simulated-time limit.
+    """Raised by the episode's watchdog (harness._Watchdog) when an episode passes its simulated-time limit.
 
     A BaseException, so a controller's `except Exception` cannot swallow it."""

@@ -9,6 +9,8 @@ faults (the file does not load, no GL context) raise InfrastructureError instead
 from __future__ import annotations
 
 import json
+import signal
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -67,28 +69,47 @@ def _interpret(returned) -> tuple[str, str, dict]:
     return outcome, reason, extra
 
 
-class _LimitedStep:
-    """`mujoco.mj_step` for the length of an episode: the real step, then the simulated-time limit
-    (and, for `--video`, a frame each `every` simulated seconds).
+WATCH_SECONDS = 0.01  # how often (wall clock) the watchdog reads the episode's simulated time
+
+
+class _Watchdog:
+    """The simulated-time limit of an episode, without touching `mujoco.mj_step`: a timer reads
+    `data.time` every WATCH_SECONDS and ends the episode past the limit (and, for `--video`,
+    records a frame each `every` simulated seconds).
 
     MuJoCo's own control callback cannot do this: while one is installed no model compiles,
-    and controllers may compile models (IK, planning) mid-episode. So the limit holds for
-    controllers that step through `mujoco.mj_step`; one that bound `mj_step` before the
-    episode is only checked when it returns."""
+    and controllers compile models (IK, planning) mid-episode. Python runs the timer's handler
+    between bytecodes of the main thread, so a runaway loop of `mj_step` calls ends within one
+    tick; elsewhere (a thread) the limit is checked when the controller returns."""
 
-    def __init__(self, step: Callable, limit: float, every: float | None):
-        self.step = step
+    def __init__(self, data: mujoco.MjData, limit: float, every: float | None):
+        self.data = data
         self.limit = limit
         self.every = every
         self.next_frame = 0.0
+        self.armed = threading.current_thread() is threading.main_thread()
 
-    def __call__(self, model: mujoco.MjModel, data: mujoco.MjData, *args, **kwargs) -> None:
-        self.step(model, data, *args, **kwargs)
-        if data.time > self.limit:
+    def _tick(self, signum, frame) -> None:
+        if self.data.time > self.limit:
             raise SimulationTimeLimit()
-        if self.every is not None and _observer is not None and data.time >= self.next_frame:
-            self.next_frame = data.time + self.every
-            _observer(f"t = {data.time:.1f} s", model, data)
+        if self.every is not None and _observer is not None and self.data.time >= self.next_frame:
+            self.next_frame = self.data.time + self.every
+            _observer(f"t = {self.data.time:.1f} s", self._model, self.data)
+
+    def __call__(self, model: mujoco.MjModel) -> "_Watchdog":
+        self._model = model
+        return self
+
+    def __enter__(self) -> "_Watchdog":
+        if self.armed:
+            self._previous = signal.signal(signal.SIGALRM, self._tick)
+            signal.setitimer(signal.ITIMER_REAL, WATCH_SECONDS, WATCH_SECONDS)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.armed:
+            signal.setitimer(signal.ITIMER_REAL, 0)
+            signal.signal(signal.SIGALRM, self._previous)
 
 
 def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every: float | None = None) -> EpisodeResult:
@@ -99,19 +120,20 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
     model = load_model(task.mjcf_path)
     data = fresh_data(model)
     _observer = observer
-    real_step = mujoco.mj_step
-    mujoco.mj_step = _LimitedStep(real_step, task.max_sim_seconds, frame_every)
+    sim_seconds = None  # the time to record, when the watchdog stopped the episode (data.time is past it by a tick)
     try:
-        outcome, reason, extra = _interpret(controller(with_body_names(task.scene), model, data))
+        with _Watchdog(data, task.max_sim_seconds, frame_every)(model):
+            returned = controller(with_body_names(task.scene), model, data)
+        outcome, reason, extra = _interpret(returned)
     except SimulationTimeLimit:
         outcome, reason, extra = "timeout", f"still running after {task.max_sim_seconds:g} simulated seconds", {}
+        sim_seconds = task.max_sim_seconds  # where it stopped depends on the wall clock: the record must not
     except InfrastructureError:
         raise
     except Exception as error:  # the controller's own failure is an outcome, and the campaign goes on
         message = str(error).strip().splitlines()
         outcome, reason, extra = "error", f"{type(error).__name__}: {message[0] if message else ''}".rstrip(": "), {}
     finally:
-        mujoco.mj_step = real_step
         _observer = None
     if outcome != "timeout" and data.time > task.max_sim_seconds:
         outcome, reason, extra = "timeout", f"ran {data.time:g} simulated seconds, past the limit of {task.max_sim_seconds:g}", {}
@@ -120,7 +142,7 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         seed=int(task.seed),
         outcome=outcome,
         reason=reason,
-        sim_seconds=round(float(data.time), 3),
+        sim_seconds=round(float(data.time if sim_seconds is None else sim_seconds), 3),
         wall_seconds=round(time.perf_counter() - started, 3),
         extra=extra,
     )
