@@ -20,11 +20,10 @@ from rich.table import Table
 
 def settle(path: Path, seconds: float) -> tuple[mujoco.MjModel, np.ndarray, np.ndarray]:
     """Body positions of the MJCF at `path` before and after `seconds` of simulation."""
-    model = mujoco.MjModel.from_xml_path(str(path))
-    data = mujoco.MjData(model)
-    if model.nkey:  # the compiled scenes carry a `home` keyframe with the arms at rest
-        mujoco.mj_resetDataKeyframe(model, data, 0)
-    mujoco.mj_forward(model, data)
+    from prsc.backends.runner.harness import fresh_data, load_model
+
+    model = load_model(path)  # as an episode loads it: at the `home` keyframe, arms at rest
+    data = fresh_data(model)
     before = data.xpos.copy()
     for _ in range(int(round(seconds / model.opt.timestep))):
         mujoco.mj_step(model, data)

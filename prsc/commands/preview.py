@@ -94,14 +94,14 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: 
     import mujoco
 
     from prsc.backends.mjcf import render
-    from prsc.backends.runner.harness import fresh_data
+    from prsc.backends.runner.harness import fresh_data, load_model
     from prsc.backends.scene import parse_scene
     from prsc.backends.store import AssetStore
 
     path = folder / "mjcf" / f"{scene.get('index', 0)}.xml"
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(render(parse_scene(scene), path, AssetStore(folder / "assets")))
-    model = mujoco.MjModel.from_xml_path(str(path))
+    model = load_model(path)
     data = fresh_data(model)
     if camera_name is not None:
         # The backends name an object's camera after the object (it looks along its +y).
