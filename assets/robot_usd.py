@@ -32,34 +32,24 @@ _LINEAR_STIFFNESS = 2000.0  # N / m
 _LINEAR_DAMPING = 20.0  # N s / m
 
 
-def robot_home(robot: str) -> dict[str, float]:
-    """Joint positions of the robot's home posture, by URDF joint name."""
-    if robot == "panda":
-        from prsc.assets.panda import ARM_JOINTS, FINGER_JOINTS, GRIPPER_OPEN, HOME_QPOS
-
-        home = dict(zip(ARM_JOINTS, HOME_QPOS))
-        home.update({name: GRIPPER_OPEN for name in FINGER_JOINTS})
-        return home
-    return {}
-
-
 def _build_dir() -> Path:
     from prsc.assets.panda import build_dir
 
     return build_dir()
 
 
-def robot_usd_cached(robot: str, urdf_path: Path) -> Path:
-    """Path of the robot's USD asset, converting it on first use (keyed by URDF and recipe)."""
+def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float]) -> Path:
+    """Path of the robot's USD asset (default prim `/<robot>`, a valid prim name), posed at
+    `home` (joint name -> value), converting it on first use (keyed by URDF, home and recipe)."""
     digest = hashlib.sha256()
     digest.update(RECIPE_VERSION.encode())
     digest.update(Path(urdf_path).read_bytes())
-    digest.update(repr(sorted(robot_home(robot).items())).encode())
+    digest.update(repr(sorted(home.items())).encode())
     target = _build_dir() / f"{robot}-usd-{digest.hexdigest()[:12]}" / f"{robot}.usdc"
     if not target.is_file():
         target.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(target) as tmp:
-            _write_robot_usd(robot, read_urdf(urdf_path), tmp)
+            _write_robot_usd(robot, read_urdf(urdf_path), home, tmp)
     return target
 
 
@@ -179,7 +169,7 @@ def _joint(stage, root: str, joint: Joint, home: dict[str, float]) -> None:
             drive.CreateMaxForceAttr(joint.effort)
 
 
-def _write_robot_usd(robot: str, tree: RobotTree, path: Path) -> None:
+def _write_robot_usd(robot: str, tree: RobotTree, home: dict[str, float], path: Path) -> None:
     """Convert a parsed URDF into a USD articulation file at `path`."""
     from pxr import Sdf, Usd, UsdGeom, UsdPhysics
 
@@ -191,7 +181,6 @@ def _write_robot_usd(robot: str, tree: RobotTree, path: Path) -> None:
     top = UsdGeom.Xform.Define(stage, root)
     stage.SetDefaultPrim(top.GetPrim())
     UsdPhysics.ArticulationRootAPI.Apply(top.GetPrim())
-    home = robot_home(robot)
     poses = tree.link_poses(home)
     for link in tree.links:
         xform = UsdGeom.Xform.Define(stage, f"{root}/{link.name}")

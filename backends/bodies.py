@@ -10,7 +10,8 @@ import numpy as np
 
 from prsc.assets.containers import container_parts
 from prsc.assets.parts import Part, box, cylinder, sphere
-from prsc.assets.registry import is_robot, part_recipe
+from prsc.assets.articulated import RobotModel, robot_model
+from prsc.assets.registry import part_recipe
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore
@@ -48,7 +49,7 @@ class Body:
     obj: SceneObject
     parts: tuple[Part, ...]  # empty for a robot: the robot model is its geometry
     inertial: Inertial  # MOUNT_INERTIAL for a robot (its links carry their own)
-    robot: str | None  # canonical robot model name, e.g. "panda"
+    robot: RobotModel | None  # an articulated asset: the Panda or the user's URDF/MJCF
     camera: CameraSpec | None
 
     @property
@@ -63,8 +64,9 @@ class Body:
 
     @property
     def mount_position(self) -> tuple[float, float, float]:
-        """Robot base in the object frame: the bottom centre of the box."""
-        return (0.0, 0.0, -self.obj.dimensions[2] / 2)
+        """The robot's root frame in the object frame (the Panda: the box's bottom centre)."""
+        assert self.robot is not None
+        return self.robot.mount_position(self.obj.dimensions)
 
 
 def reset_model_warnings() -> None:
@@ -130,7 +132,10 @@ def object_interior(obj: SceneObject) -> Interior | None:
 
 def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
-    robot = is_robot(obj.model)
+    try:
+        robot = robot_model(obj.model, mesh_folders(scene.spec, store.mesh_dirs))
+    except PrscError as error:
+        raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
     if robot is not None and obj.camera is None:
         return Body(obj, (), MOUNT_INERTIAL, robot, None)
     parts: tuple[Part, ...] | None = None

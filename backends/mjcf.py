@@ -3,13 +3,15 @@
 Layout (names the runner relies on):
 - a body per object named after it, at the scene pose (box centre); a free object has a
   free joint of the same name; geoms are named `<object>/<part>`;
-- a Robot with model "panda": the Panda MJCF attached with prefix `<object>/`, its base
-  body `<object>/base` at the bottom centre of the box (so `r1/base`, `r1/joint1`, `r1/tcp`,
-  actuators `r1/joint1..7`, `r1/gripper`). The offset is the base body's own `pos`, not a
+- an articulated asset (the Panda, a user's URDF or MJCF: prsc/assets/articulated.py)
+  attached with prefix `<object>/`, its root body where the asset mounts it (the Panda's
+  `<object>/base` at the bottom centre of the box, so `r1/base`, `r1/joint1`, `r1/tcp`,
+  actuators `r1/joint1..7`, `r1/gripper`; a file's root where the file puts it in its box). The offset is the base body's own `pos`, not a
   `<frame>`: Drake's MuJoCo parser skips frames, and with them the whole robot;
 - a camera object: a camera named after the object looking along the object's +y
   (image up = its +z) with the object's fovy and resolution;
-- a keyframe `home`: free bodies at their scene poses, robot arms at their home posture.
+- a keyframe `home`: free bodies at their scene poses, robot joints at the scene's `joints`
+  (the asset's home where the spec sets none), position servos holding them.
 
 Speed: the robot's MJCF fragment (bodies, assets, actuators, equalities, key) is built once
 per process and prefix by MjSpec.attach and spliced into each scene's XML; only the small
@@ -24,6 +26,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
 from prsc.backends.numbers import num, nums
@@ -47,14 +50,22 @@ class RobotFragment:
     """The MJCF of one attached robot as serialised text per section, ready to splice."""
 
     sections: dict[str, str]  # section tag -> its child elements as XML text
-    base: str  # the robot's root body as XML text, at the origin of its parent
+    base: str  # the robot's root body as XML text, without a position of its own
+    joints: tuple[str, ...]  # the robot's joints in qpos order (unprefixed)
+    servo_joints: tuple[str | None, ...]  # per actuator: the joint it holds as a position servo, or None
 
     def base_at(self, position) -> str:
         """The root body's XML text placed at `position` in its parent body."""
         head, tail = self.base.split(">", 1)
         return f'{head} pos="{nums(position)}">{tail}'
-    qpos: list[str]
-    ctrl: list[str]
+
+    def home(self, robot: RobotModel, joints: dict[str, float]) -> tuple[list[str], list[str]]:
+        """The `home` key's qpos and ctrl of this robot at the scene's joint values: each
+        position servo holds its joint there, other actuators start at 0."""
+        values = robot.home(joints)
+        qpos = [num(values[name]) for name in self.joints]
+        ctrl = [num(values[name]) if name is not None else "0" for name in self.servo_joints]
+        return qpos, ctrl
 
 
 def _options(spec) -> None:
@@ -64,29 +75,30 @@ def _options(spec) -> None:
 
 
 @lru_cache(maxsize=32)
-def _robot_fragment_xml(robot: str, prefix: str) -> tuple[str, tuple[float, ...], tuple[float, ...]]:
-    """XML of a model holding only the robot attached with `prefix`, and its home key's
-    qpos and ctrl (built once per process)."""
+def _robot_fragment_xml(robot: RobotModel, prefix: str) -> tuple[str, tuple[str, ...], tuple[str | None, ...]]:
+    """XML of a model holding only the robot attached with `prefix`, its joints in qpos
+    order and the joint each actuator servoes (built once per process)."""
     import mujoco
 
-    from prsc.assets.panda import GRIPPER_OPEN, HOME_QPOS, panda_mjcf_spec
-
-    if robot != "panda":
-        raise ValueError(f"no MJCF for robot {robot!r}")
     holder = mujoco.MjSpec()
     _options(holder)
-    # The home key in joint order (arm, two fingers) and actuator order (arm, gripper).
-    qpos = tuple(HOME_QPOS) + (GRIPPER_OPEN, GRIPPER_OPEN)
-    ctrl = tuple(HOME_QPOS) + (GRIPPER_OPEN,)
-    child = panda_mjcf_spec()
+    child = robot.mjcf_spec()
     frame = holder.worldbody.add_frame()
-    frame.attach_body(child.body("base"), prefix, "")
-    return holder.to_xml(), qpos, ctrl
+    frame.attach_body(child.body(robot.root), prefix, "")
+    model = holder.compile()
+    joints = tuple(model.joint(j).name[len(prefix):] for j in range(model.njnt))
+    servo_joints = []
+    for a in range(model.nu):
+        servo = (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+                 and int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
+                 and model.actuator_biasprm[a, 1] == -model.actuator_gainprm[a, 0])
+        servo_joints.append(joints[model.actuator_trnid[a, 0]] if servo else None)
+    return holder.to_xml(), joints, tuple(servo_joints)
 
 
-def _robot_fragment(robot: str, prefix: str, store: AssetStore, folder: Path) -> RobotFragment:
+def _robot_fragment(robot: RobotModel, prefix: str, store: AssetStore, folder: Path) -> RobotFragment:
     """The robot fragment with mesh files pointing into the store, relative to `folder`."""
-    xml, home_qpos, home_ctrl = _robot_fragment_xml(robot, prefix)
+    xml, joints, servo_joints = _robot_fragment_xml(robot, prefix)
     root = ET.fromstring(xml)
     sections: dict[str, str] = {}
     for section in root:
@@ -94,18 +106,17 @@ def _robot_fragment(robot: str, prefix: str, store: AssetStore, folder: Path) ->
             continue
         for element in section:
             if element.get("file"):
-                element.set("file", relative_path(store.robot_file(robot, element.get("file")), folder))
+                element.set("file", relative_path(store.robot_file(robot.key, element.get("file")), folder))
         sections[section.tag] = "\n".join(element_text(e) for e in section)
     base = next(root.find("worldbody").iter("body"))
-    if base.get("pos") is not None:
-        raise ValueError(f"the {robot} base body has a pos of its own; the mount offset would replace it")
-    return RobotFragment(sections, element_text(base), [num(v) for v in home_qpos], [num(v) for v in home_ctrl])
+    base.attrib.pop("pos", None)  # the mount places it
+    return RobotFragment(sections, element_text(base), joints, servo_joints)
 
 
-_fragment_cache: dict[tuple[str, str, str, str], RobotFragment] = {}
+_fragment_cache: dict[tuple[RobotModel, str, str, str], RobotFragment] = {}
 
 
-def robot_fragment(robot: str, prefix: str, store: AssetStore, folder: Path) -> RobotFragment:
+def robot_fragment(robot: RobotModel, prefix: str, store: AssetStore, folder: Path) -> RobotFragment:
     """Cached robot fragment for one prefix and output folder."""
     key = (robot, prefix, str(store.root), str(folder))
     if key not in _fragment_cache:
@@ -280,8 +291,9 @@ def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
             # Robot default classes become subclasses of the scene's top-level default.
             if text:
                 placeholder(_section(root, tag), pieces, text)
-        qpos += fragment.qpos
-        ctrl += fragment.ctrl
+        robot_qpos, robot_ctrl = fragment.home(body.robot, obj.joints)
+        qpos += robot_qpos
+        ctrl += robot_ctrl
     if qpos or ctrl:
         key = ET.SubElement(_section(root, "keyframe"), "key", name="home")
         if qpos:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Mapping
 
 from prsc.backends.names import element_names
@@ -39,6 +39,7 @@ class SceneObject:
     camera: CameraSpec | None
     properties: Mapping[str, Any]
     label: str = ""  # the user's name (scene JSON); `name` is its element name (prsc.backends.names)
+    joints: Mapping[str, float] = field(default_factory=dict)  # an asset's starting joint values (docs/assets.md)
 
 
 @dataclass(frozen=True)
@@ -140,6 +141,10 @@ def _object(raw: Any, k: int) -> SceneObject:
     camera = _camera(raw.get("camera"), f"{where}.camera")
     if not static and camera is None and mass == 0.0:
         raise _fail(f"{where}.mass", "a free body needs a positive mass")
+    joints = raw.get("joints") or {}
+    if not isinstance(joints, Mapping) or not all(isinstance(k, str) for k in joints):
+        raise _fail(f"{where}.joints", "expected an object of joint name -> value")
+    joints = {k: _floats([v], 1, f"{where}.joints.{k}")[0] for k, v in joints.items()}
     cls = raw.get("class", "Object")
     return SceneObject(
         name=name,
@@ -154,6 +159,7 @@ def _object(raw: Any, k: int) -> SceneObject:
         model=model or None,
         camera=camera,
         properties=properties,
+        joints=joints,
     )
 
 

@@ -31,8 +31,8 @@ from prsc.backends.inertia import Inertial
 from prsc.backends.mjcf import FRICTION
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
-from prsc.backends.store import AssetStore, relative_path, robot_urdf_source
-from prsc.backends.urdf import robot_base_yaw
+from prsc.assets.articulated import RobotModel, check_robot_name
+from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 from prsc.geometry.rotations import matrix_to_rpy, quat_to_rpy, rot_z
@@ -119,15 +119,15 @@ def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
 
 
 @lru_cache(maxsize=8)
-def _robot_tree(robot: str) -> RobotTree:
-    return read_urdf(robot_urdf_source(robot))
+def _robot_tree(robot: RobotModel) -> RobotTree:
+    return read_urdf(robot.urdf)
 
 
-def _robot_geometry(parent: ET.Element, geometry: Geometry, robot: str, store: AssetStore, folder: Path) -> None:
+def _robot_geometry(parent: ET.Element, geometry: Geometry, robot: RobotModel, store: AssetStore, folder: Path) -> None:
     element = ET.SubElement(parent, "geometry")
     if geometry.kind == "mesh":
         mesh = ET.SubElement(element, "mesh")
-        ET.SubElement(mesh, "uri").text = relative_path(store.robot_file(robot, geometry.filename), folder)
+        ET.SubElement(mesh, "uri").text = relative_path(store.robot_file(robot.key, geometry.filename), folder)
         if geometry.scale != (1.0, 1.0, 1.0):
             ET.SubElement(mesh, "scale").text = nums(geometry.scale)
     elif geometry.kind == "box":
@@ -141,7 +141,7 @@ def _robot_geometry(parent: ET.Element, geometry: Geometry, robot: str, store: A
 
 
 @lru_cache(maxsize=64)
-def _robot_links_text(robot: str, store_root: str, folder: str, mount: tuple[float, float, float]) -> tuple[str, ...]:
+def _robot_links_text(robot: RobotModel, store_root: str, folder: str, mount: tuple[float, float, float]) -> tuple[str, ...]:
     """The robot's links and joints as SDF text in the model (object) frame (cached).
 
     Links sit at the zero configuration, the base at `mount` and yawed so the arm reaches
@@ -152,7 +152,7 @@ def _robot_links_text(robot: str, store_root: str, folder: str, mount: tuple[flo
     tree = _robot_tree(robot)
     holder = ET.Element("model")
     base = np.eye(4)
-    base[:3, :3] = rot_z(robot_base_yaw(robot))
+    base[:3, :3] = rot_z(robot.base_yaw)
     base[:3, 3] = mount
     poses = tree.link_poses()
     for link in tree.links:
@@ -196,9 +196,9 @@ def _robot_model(world: ET.Element, body: Body, store: AssetStore, folder: Path,
     """The robot as an SDF model at the object's pose; its first link, named after the
     object, is the mount (welded to the robot's base, and to the world when fixed)."""
     obj = body.obj
+    assert body.robot is not None
     tree = _robot_tree(body.robot)
-    if obj.name in {l.name for l in tree.links}:
-        raise PrscError(f"robot object {obj.name!r} has the name of one of its {body.robot} links; rename it")
+    check_robot_name(body.robot, obj.name)
     model = ET.SubElement(world, "model", name=obj.name)
     _pose(model, obj.position, obj.quaternion)
     # Never static: Drake refuses a static model with moving joints (module docstring).

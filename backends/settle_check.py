@@ -18,6 +18,7 @@ from typing import Iterable
 import mujoco
 import numpy as np
 
+from prsc.asset_files import names_asset_file
 from prsc.assets.registry import is_hollow, is_robot, part_recipe
 from prsc.backends.scene import Scene, SceneObject, parse_scene
 from prsc.backends.settle_report import settle
@@ -80,7 +81,7 @@ def _inside(points: np.ndarray, support: SceneObject, interior: Interior | None)
 
 
 def _known(model: str | None) -> bool:
-    return model is None or part_recipe(model) is not None or is_robot(model) is not None
+    return model is None or part_recipe(model) is not None or is_robot(model) is not None or names_asset_file(model)
 
 
 def cause(scene: Scene, obj: SceneObject) -> str:

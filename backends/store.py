@@ -13,6 +13,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
+from prsc.assets.articulated import RobotModel
 from prsc.files import atomic_copy, atomic_write
 from prsc.errors import PrscError
 from prsc.mesh_paths import load_mesh, obj_text
@@ -25,21 +26,6 @@ def relative_path(target: Path | str, start: Path | str) -> str:
 
 def _sha12(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()[:12]
-
-
-@lru_cache(maxsize=8)
-def _robot_source(robot: str) -> tuple[str, str]:
-    """(URDF path, MJCF path) of a robot model, built by its asset recipe."""
-    if robot == "panda":
-        from prsc.assets.panda import panda_mjcf_path, panda_urdf_path
-
-        return str(panda_urdf_path()), str(panda_mjcf_path())
-    raise PrscError(f"no asset recipe for robot model {robot!r}")
-
-
-def robot_urdf_source(robot: str) -> Path:
-    """The robot's converted URDF (absolute mesh paths) from its asset recipe."""
-    return Path(_robot_source(robot)[0])
 
 
 @lru_cache(maxsize=64)
@@ -63,7 +49,7 @@ class AssetStore:
 
     # ------------------------------------------------------------------ robots
     def robot_file(self, robot: str, source: str | Path) -> Path:
-        """The store's copy of a file a robot model uses (a mesh), copied on first use.
+        """The store's copy of a file robot `robot` (its RobotModel.key) uses, copied on first use.
 
         The whole folder is copied, so an OBJ keeps its material and texture files.
         """
@@ -78,13 +64,13 @@ class AssetStore:
             atomic_write(marker, "")
         return target / os.path.basename(source)
 
-    def robot_usd(self, robot: str) -> Path:
+    def robot_usd(self, robot: RobotModel) -> Path:
         """The robot as a USD articulation asset (converted once, cached in the build folder).
 
         Its folder name carries the conversion's hash, so a changed robot never reuses a
         stale copy."""
         source = _robot_usd_source(robot)
-        target = self.root / robot / source.parent.name / source.name
+        target = self.root / robot.key / source.parent.name / source.name
         if not target.is_file():
             target.parent.mkdir(parents=True, exist_ok=True)
             atomic_copy(source, target)
@@ -119,10 +105,10 @@ class AssetStore:
 
 
 @lru_cache(maxsize=8)
-def _robot_usd_source(robot: str) -> Path:
+def _robot_usd_source(robot: RobotModel) -> Path:
     from prsc.assets.robot_usd import robot_usd_cached
 
-    return robot_usd_cached(robot, robot_urdf_source(robot))
+    return robot_usd_cached(robot.prim_name, robot.urdf, robot.home())
 
 
 @lru_cache(maxsize=256)

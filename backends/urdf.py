@@ -24,7 +24,8 @@ from prsc.backends.gazebo_camera import camera_sensor_body
 from prsc.backends.inertia import Inertial
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
-from prsc.backends.store import AssetStore, relative_path, robot_urdf_source
+from prsc.assets.articulated import RobotModel, check_robot_name
+from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
 from prsc.geometry.rotations import quat_to_rpy
@@ -93,61 +94,44 @@ def _gazebo_camera(robot: ET.Element, body: Body) -> None:
 
 
 @lru_cache(maxsize=16)
-def _robot_body_text(robot: str, store_root: str, store_from_bundle: str) -> tuple[str, ...]:
+@lru_cache(maxsize=32)
+def _robot_body_text(robot: RobotModel, store_root: str, store_from_bundle: str) -> tuple[str, ...]:
     """The robot URDF's top-level elements as text, mesh paths pointing into the store.
 
     Keyed by the store's path relative to the bundle folder, which every scene's bundle
     shares, so the text is built once per process.
     """
     store = AssetStore(store_root)
-    root = ET.parse(robot_urdf_source(robot)).getroot()
+    root = ET.parse(robot.urdf).getroot()
     for mesh in root.iter("mesh"):
-        inside = relative_path(store.robot_file(robot, mesh.get("filename")), store.root)
+        inside = relative_path(store.robot_file(robot.key, mesh.get("filename")), store.root)
         mesh.set("filename", f"{store_from_bundle}/{inside}")
     return ("\n".join(element_text(child) for child in root),)
 
 
-def robot_base_yaw(robot: str) -> float:
-    """Yaw from the robot URDF's base frame to the prsc base frame (arm along +y)."""
-    if robot == "panda":
-        from prsc.assets.panda import PANDA_BASE_YAW
-
-        return PANDA_BASE_YAW
-    return 0.0
-
-
-def robot_root_link(robot: str) -> str:
+@lru_cache(maxsize=32)
+def robot_root_link(robot: RobotModel) -> str:
     """Name of the root link of a robot's URDF."""
-    template = ET.parse(robot_urdf_source(robot)).getroot()
+    template = ET.parse(robot.urdf).getroot()
     children = {j.find("child").get("link") for j in template.findall("joint")}
     return next(l.get("name") for l in template.findall("link") if l.get("name") not in children)
 
 
 def _robot_urdf(body: Body, store: AssetStore, folder: Path) -> str:
     """The robot's URDF under a mount link named after the object at its box centre."""
+    assert body.robot is not None
     robot = ET.Element("robot", name=body.name)
-    if body.name in _link_names(body.robot):
-        raise PrscError(f"robot object {body.name!r} has the name of one of its {body.robot} links; rename it")
+    check_robot_name(body.robot, body.name)
     mount = ET.SubElement(robot, "link", name=body.name)
     _inertial(mount, body.inertial)
     joint = ET.SubElement(robot, "joint", name=f"{body.name}_mount", type="fixed")
-    _origin(joint, body.mount_position, rpy=(0.0, 0.0, robot_base_yaw(body.robot)))
+    _origin(joint, body.mount_position, rpy=(0.0, 0.0, body.robot.base_yaw))
     ET.SubElement(joint, "parent", link=body.name)
-    ET.SubElement(joint, "child", link=_root_link_cached(body.robot))
+    ET.SubElement(joint, "child", link=robot_root_link(body.robot))
     pieces: list[str] = []
     for text in _robot_body_text(body.robot, str(store.root), relative_path(store.root, folder)):
         placeholder(robot, pieces, text)
     return '<?xml version="1.0"?>\n' + serialise(robot, pieces) + "\n"
-
-
-@lru_cache(maxsize=16)
-def _link_names(robot: str) -> frozenset[str]:
-    return frozenset(l.get("name") for l in ET.parse(robot_urdf_source(robot)).getroot().findall("link"))
-
-
-@lru_cache(maxsize=16)
-def _root_link_cached(robot: str) -> str:
-    return robot_root_link(robot)
 
 
 def _ground_urdf() -> ET.Element:
@@ -205,7 +189,9 @@ def urdf_bundle(scene: Scene, folder: Path, store: AssetStore) -> dict[str, str]
                 "base_position": list(obj.position),
                 "base_orientation_xyzw": xyzw(obj.quaternion),
                 "use_fixed_base": body.fixed,
-                "robot": body.robot,
+                "robot": body.robot.key if body.robot else None,
+                # Where each joint starts (URDF has no initial positions; pybullet loads at 0).
+                "joints": body.robot.home(body.obj.joints) if body.robot else None,
                 "camera": camera,
             }
         )

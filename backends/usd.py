@@ -21,7 +21,6 @@ import numpy as np
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
 from prsc.backends.scene import Scene
 from prsc.backends.store import AssetStore, relative_path
-from prsc.backends.urdf import robot_base_yaw
 from prsc.geometry.rotations import matrix_to_quat, rot_z
 
 GROUND_HALF_SIZE = 50.0
@@ -162,7 +161,7 @@ def _robot_mount(stage, body: Body) -> None:
     obj = body.obj
     xform = UsdGeom.Xform.Define(stage, f"/World/{obj.name}")
     _pose(xform, obj.position, obj.quaternion)
-    yaw = robot_base_yaw(body.robot)
+    yaw = body.robot.base_yaw
     mount = UsdGeom.Xform.Define(stage, f"/World/{obj.name}/mount")
     _pose(mount, body.mount_position, (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2)))
 
@@ -175,13 +174,13 @@ def _robot_reference(layer, body: Body, asset: Path, folder: Path) -> None:
     """
     from pxr import Gf, Sdf
 
-    path = f"/World/{body.name}/mount/{body.robot}"
+    path = f"/World/{body.name}/mount/{body.robot.prim_name}"
     spec = Sdf.CreatePrimInLayer(layer, path)
     spec.specifier = Sdf.SpecifierDef
     spec.referenceList.Prepend(Sdf.Reference(relative_path(asset, folder)))
     # The asset's root joint holds the base to the world: its world-side frame is the mount.
     local = np.eye(4)
-    local[:3, :3] = rot_z(robot_base_yaw(body.robot))
+    local[:3, :3] = rot_z(body.robot.base_yaw)
     local[:3, 3] = body.mount_position
     base = object_matrix(body.obj) @ local
     joint = Sdf.CreatePrimInLayer(layer, f"{path}/joints/root_joint")

@@ -91,3 +91,17 @@ AXES = ("x", "y", "z")
 PYTHON_MODULES = frozenset({"numpy", "scipy", "random", "os", "sys", "subprocess", "torch", "pathlib",
                             "shutil", "json", "time", "itertools", "functools", "collections",
                             "mujoco", "pybullet", "scenic", "probRobScene", "builtins", "io"})
+
+
+JOINT_PREFIX = "joint "
+"""`with joint "NAME" v` sets the property `joint NAME` (a name no `with prop` can spell)."""
+
+
+def joint_property(joint: str) -> str:
+    """The property that holds joint `joint`'s starting value."""
+    return JOINT_PREFIX + joint
+
+
+def joint_name(prop: str) -> str | None:
+    """The joint a property sets, or None when it is not a joint value."""
+    return prop[len(JOINT_PREFIX):] if prop.startswith(JOINT_PREFIX) else None

@@ -16,6 +16,7 @@ from prsc.ir.expressions import DrawIds, ExprResolver
 from prsc.ir.type_checks import article, expect, type_words
 from prsc.ir.imports import MATH, ModuleGraph, load_module_graph
 from prsc.ir.loops import LoopStatements, bound_names, iteration_name
+from prsc.ir.asset_models import with_asset_models
 from prsc.ir.mesh_sizes import with_mesh_sizes
 from prsc.ir.order import order_properties, order_specifiers
 from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule,
@@ -381,7 +382,7 @@ def compile_program(path: str, include_dirs: Sequence[str] = ()) -> Program:
     path = os.fspath(path)
     try:
         graph = load_module_graph(path, include_dirs)
-        program = with_mesh_sizes(Compiler(graph).run(), include_dirs)
+        program = with_asset_models(with_mesh_sizes(Compiler(graph).run(), include_dirs), include_dirs)
         check_values(program)
         return program
     except RecursionError:

@@ -6,7 +6,7 @@ import math
 
 from prsc.ir import model as ir
 from prsc.ir.program import ObjectDecl, Program, SelfRef
-from prsc.ir.builtins import DIRECTION_PHRASES
+from prsc.ir.builtins import DIRECTION_PHRASES, joint_name
 
 _PRECEDENCE = {"or": 1, "and": 2, "not": 3, "compare": 4, "relative": 5, "+": 6, "-": 6, "*": 7, "/": 7,
                "unary": 8}
@@ -108,6 +108,9 @@ def _arg(expr: ir.Expr) -> str:
 def format_specifier(spec: ir.Specifier) -> str:
     """Source-like text of a specifier."""
     if isinstance(spec, ir.With):
+        joint = joint_name(spec.prop)
+        if joint is not None:
+            return f"with joint {joint!r} {_arg(spec.value)}"
         return f"with {spec.prop} {_arg(spec.value)}"
     if isinstance(spec, ir.At):
         return f"at {_arg(spec.point)}"

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
+from prsc.asset_files import names_asset_file
 from prsc.errors import PrscError
 
 KNOWN_MODELS = frozenset({"panda", "tray", "table", "cube", "cylinder", "bowl", "cup", "camera"})
@@ -25,4 +26,6 @@ def model_of(props: Mapping[str, Any], class_name: str) -> str | None:
         return guess if guess in KNOWN_MODELS else None
     if not isinstance(model, str):
         raise PrscError(f"model of {class_name} must be a string, got {model!r}")
+    if names_asset_file(model):
+        return model.strip()  # a file name keeps its case (docs/assets.md)
     return model.strip().lower() or None

@@ -6,7 +6,7 @@ import dataclasses
 
 from prsc.errors import PrscError
 from prsc.ir import model as ir
-from prsc.ir.builtins import AXES, BOX_READS, DIRECTION_PHRASES
+from prsc.ir.builtins import AXES, BOX_READS, DIRECTION_PHRASES, joint_property
 from prsc.ir.expressions import ExprResolver
 from prsc.ir.type_checks import LOCATED_TYPES, POINT_TYPES, article, expect, type_words
 from prsc.ir.scope import ClassInfo, VariableInfo, did_you_mean
@@ -73,6 +73,8 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
     span = spec.span
     if isinstance(spec, nodes.WithSpec):
         return _with(resolver, cls, spec)
+    if isinstance(spec, nodes.JointSpec):
+        return _with_joint(resolver, cls, spec)
     if isinstance(spec, nodes.AtSpec):
         point = expect(r(spec.point), POINT_TYPES, "the point after `at`")
         return ir.At(span, POSITION, (), point)
@@ -149,6 +151,19 @@ def lower_specifier(resolver: ExprResolver, cls: ClassInfo, spec: nodes.Specifie
             raise PrscError(f"`{phrase}` needs a camera object, not {article(camera.type)}", camera.span)
         return ir.VisibleFrom(span, POSITION, BOX_READS, camera, outside=spec.negated)
     raise PrscError("unknown specifier", span)  # pragma: no cover
+
+
+def _with_joint(resolver: ExprResolver, cls: ClassInfo, spec: nodes.JointSpec) -> ir.With:
+    """`with joint "NAME" v`: the property `joint_property(NAME)`, a length or an angle
+    (whether NAME is a joint of the object's asset is checked with its file, prsc/ir/asset_models.py)."""
+    if not spec.joint:
+        raise PrscError("a joint name cannot be empty", spec.joint_span)
+    value = resolver.resolve(spec.value)
+    accepted = cls.accepted_types("width") or (T.SCALAR,)
+    if value.type != T.ANY and value.type not in accepted:
+        raise PrscError(f"`with joint` needs {type_words(accepted)}, not {article(value.type)}", value.span)
+    prop = joint_property(spec.joint)
+    return ir.With(spec.span, (prop,), (), prop, value)
 
 
 def _with(resolver: ExprResolver, cls: ClassInfo, spec: nodes.WithSpec) -> ir.With:

@@ -16,7 +16,7 @@ import numpy as np
 from prsc.constraints.values import DIMENSIONS, ObjectValue, OrientedPoint, RegionValue
 from prsc.errors import PrscError, Span
 from prsc.geometry.rotations import matrix_to_quat
-from prsc.ir.builtins import DENSITY
+from prsc.ir.builtins import DENSITY, joint_name
 from prsc.ir.models import model_of
 from prsc.limits import mass_problem, size_problem
 
@@ -184,10 +184,11 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
     if problem:
         raise PrscError(f"mass of {obj.name} {problem}")
     camera = _camera_json(props, obj.name) if is_camera else None
-    extra = {k: json_value(v) for k, v in props.items() if k not in _MAPPED}
+    extra = {k: json_value(v) for k, v in props.items() if k not in _MAPPED and joint_name(k) is None}
     if props.get("allowCollisions"):
         extra["allowCollisions"] = True
-    return {
+    joints = {joint_name(k): float(v) for k, v in props.items() if joint_name(k) is not None}
+    out = {
         "name": obj.name,
         "class": obj.class_name,
         "position": obj.position.tolist(),
@@ -201,6 +202,9 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
         "camera": camera,
         "properties": extra,
     }
+    if joints:  # an asset from a file: every joint's starting value (docs/assets.md)
+        out["joints"] = joints
+    return out
 
 
 def scene_json(
@@ -244,6 +248,8 @@ def _from_template(template: dict[str, Any], obj: ObjectValue) -> dict[str, Any]
     out["dimensions"] = list(template["dimensions"])
     out["color"] = list(template["color"])
     out["properties"] = dict(template["properties"])
+    if "joints" in template:
+        out["joints"] = dict(template["joints"])
     if template["camera"] is not None:
         out["camera"] = {"fovy": template["camera"]["fovy"], "resolution": list(template["camera"]["resolution"])}
     return out

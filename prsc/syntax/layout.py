@@ -2,7 +2,8 @@
 
 A statement continues on the next line inside brackets and after a trailing comma, so
 those newlines are dropped. Every other newline is passed on, followed by _INDENT or
-_DEDENT tokens when the indentation changes (the grammar accepts them only in class
+_DEDENT tokens when the indentation changes. The one contextual keyword, `joint` right after
+`with`, is re-typed here (the grammar accepts them only in class
 and loop bodies, so an indented top-level statement is a syntax error there, with its position).
 """
 
@@ -90,6 +91,9 @@ class Layout(PostLex):
                     raise LayoutError(f"brackets nested more than {MAX_BRACKET_DEPTH} deep", token)
             elif kind in CLOSING and brackets:
                 brackets.pop()
+            elif kind == "NAME" and token == "joint" and last is not None and last.type == "WITH":
+                # `with joint "NAME" v` (docs/assets.md): a keyword right after `with` only.
+                token = Token.new_borrow_pos("JOINT", token, token)
             yield token
             last = token
         if brackets:

@@ -184,6 +184,15 @@ class WithSpec(Specifier):
 
 
 @dataclass(frozen=True)
+class JointSpec(Specifier):
+    """`with joint "NAME" value`: a joint's starting value (docs/assets.md)."""
+
+    joint: str
+    joint_span: Span
+    value: Expr
+
+
+@dataclass(frozen=True)
 class AtSpec(Specifier):
     """`at point`."""
 

@@ -71,6 +71,8 @@ def _describe_expected(expected: set[str]) -> str:
     """The set of acceptable terminals in user words, grouped."""
     parts: list[str] = []
     rest = set(expected)
+    if "NAME" in rest:
+        rest.discard("JOINT")  # `joint` after `with` is a name re-typed by the layout
     if "WITH" in rest and "AT" in rest:
         parts.append("a specifier (with, at, in, on, left of, ahead of, facing, ...)")
         rest -= _SPECIFIER_START

@@ -133,6 +133,10 @@ class ToAst(Transformer):
         _with, name, value = children
         return n.WithSpec(self._span(meta), str(name), self._tok(name), value)
 
+    def joint_spec(self, meta, children):
+        _with, _joint, name, value = children
+        return n.JointSpec(self._span(meta), _decode_string(self.path, name), self._tok(name), value)
+
     def at_spec(self, meta, children):
         return n.AtSpec(self._span(meta), children[-1])
 

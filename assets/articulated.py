@@ -1,0 +1,146 @@
+"""Articulated assets as the backends mount them: the built-in Panda and the user's own
+URDF or MJCF files (docs/assets.md) behind one frozen `RobotModel`.
+
+Every format reads the same two sources: an MJCF tree to attach (`mjcf_spec`) and a URDF
+with absolute mesh paths (`urdf`) that the URDF, SDF and USD writers convert. A user's
+URDF is its own URDF with `package://` and relative paths resolved; a user's MJCF gets a
+URDF written from its compiled model (prsc/assets/mjcf_urdf.py).
+"""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Sequence
+
+from prsc.asset_files import ArticulatedAsset, AssetJoint, asset_spec, describe_asset, names_asset_file, resolve_asset_file
+from prsc.errors import PrscError
+from prsc.files import atomic_write
+
+GRAVITY_COMPENSATION_DAMPING = 2.0
+"""Joint damping (N m s/rad) given to an arm without actuators, which holds its pose by
+gravity compensation alone: it damps what contacts start."""
+
+
+@dataclass(frozen=True)
+class RobotModel:
+    """One articulated asset as every backend and the runner mount it."""
+
+    key: str  # names its folders in asset stores and its USD prim: "panda" or "<stem>-<hash>"
+    source: str  # the file it comes from (the Panda: its converted MJCF)
+    folders: tuple[str, ...]  # where `package://` folders are looked up
+    joints: tuple[AssetJoint, ...]  # in qpos order
+    base_yaw: float  # yaw (rad, about +z) from the URDF's base frame to prsc's base frame
+    root_offset: tuple[float, float, float] | None  # root frame from the box centre; None: bottom centre
+    root: str  # the root link (body)
+    tcp: str | None  # tool site or body
+    actuated: bool  # whether the MJCF has actuators (else it holds its pose by gravity compensation)
+
+    def mount_position(self, dimensions: tuple[float, float, float]) -> tuple[float, float, float]:
+        """The root frame in the object's (box centre) frame."""
+        if self.root_offset is None:
+            return (0.0, 0.0, -dimensions[2] / 2)
+        return self.root_offset
+
+    def home(self, joints: dict[str, float] | None = None) -> dict[str, float]:
+        """Every joint's starting value: the asset's home, then the scene's `joints`."""
+        values = {j.name: j.home for j in self.joints}
+        values.update(joints or {})
+        return values
+
+    def mjcf_spec(self):
+        """A fresh MjSpec of the asset (world body -> root), ready to attach."""
+        if self.key == "panda":
+            from prsc.assets.panda import panda_mjcf_spec
+
+            return panda_mjcf_spec()
+        spec = asset_spec(self.source, self.folders)
+        for key in list(spec.keys):  # keyframes belong to the scene, which writes its own `home`
+            spec.delete(key)
+        if not self.actuated:
+            # No actuators to hold the pose: compensate gravity on every link and damp the joints.
+            for body in spec.bodies[1:]:
+                body.gravcomp = 1.0
+            for joint in spec.joints:
+                joint.damping = [GRAVITY_COMPENSATION_DAMPING, 0.0, 0.0]
+        return spec
+
+    @property
+    def prim_name(self) -> str:
+        """The key as a USD prim name (letters, digits and `_`, not starting with a digit)."""
+        name = re.sub(r"[^A-Za-z0-9_]", "_", self.key)
+        return name if not name[0].isdigit() else "_" + name
+
+    @property
+    def urdf(self) -> Path:
+        """A URDF of the asset with absolute mesh paths (built once, cached by content)."""
+        return _urdf_path(self)
+
+
+@lru_cache(maxsize=1)
+def _panda() -> RobotModel:
+    """The built-in Panda: its converted MJCF (home keyframe included), mounted at the
+    bottom centre of the Robot box and yawed so that it reaches along +y."""
+    from dataclasses import replace
+
+    from prsc.assets.panda import ARM_JOINTS, HOME_QPOS, PANDA_BASE_YAW, panda_mjcf_path
+
+    asset = describe_asset(panda_mjcf_path())
+    exact = dict(zip(ARM_JOINTS, HOME_QPOS))  # the keyframe's text rounds them to 6 digits
+    joints = tuple(replace(j, home=exact.get(j.name, j.home)) for j in asset.joints)
+    return RobotModel("panda", asset.source, (), joints, PANDA_BASE_YAW, None, "base", "tcp", True)
+
+
+@lru_cache(maxsize=64)
+def _file_model(path: str, folders: tuple[str, ...]) -> RobotModel:
+    asset: ArticulatedAsset = describe_asset(path, folders)
+    return RobotModel(asset.key, asset.source, folders, asset.joints, 0.0, asset.root_offset, asset.root,
+                      asset.tcp, bool(asset.actuators))
+
+
+def robot_model(model: str | None, folders: Sequence[str] = ()) -> RobotModel | None:
+    """The articulated asset a scene object's `model` names, or None for any other model."""
+    if model is None:
+        return None
+    if names_asset_file(model):
+        return _file_model(str(resolve_asset_file(model, folders)), tuple(folders))
+    from prsc.assets.registry import is_robot
+
+    return _panda() if is_robot(model) == "panda" else None
+
+
+def _build_folder(model: RobotModel) -> Path:
+    from prsc.assets.panda import build_dir
+
+    return build_dir() / model.key
+
+
+@lru_cache(maxsize=64)
+def _urdf_path(model: RobotModel) -> Path:
+    if model.key == "panda":
+        from prsc.assets.panda import panda_urdf_path
+
+        return panda_urdf_path()
+    target = _build_folder(model) / f"{Path(model.source).stem}.urdf"
+    if not target.is_file():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if Path(model.source).suffix.lower() == ".urdf":
+            from prsc.asset_files import urdf_with_absolute_paths
+
+            text = urdf_with_absolute_paths(Path(model.source), model.folders)
+        else:
+            from prsc.assets.mjcf_urdf import mjcf_as_urdf
+
+            text = mjcf_as_urdf(model.mjcf_spec(), target.parent)
+        atomic_write(target, text)
+    return target
+
+
+def check_robot_name(model: RobotModel, object_name: str) -> None:
+    """An error when an object is named like one of its own links (the mount link would clash)."""
+    links = {l.get("name") for l in ET.parse(model.urdf).getroot().findall("link")}
+    if object_name in links:
+        raise PrscError(f"robot object {object_name!r} has the name of one of its {model.key} links; rename it")

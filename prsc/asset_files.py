@@ -1,0 +1,280 @@
+"""The user's own articulated assets (docs/assets.md): a URDF or MJCF file read into one
+frozen description that the IR (sizes, joint checks), the constraint stage (`reachable by`),
+the backends and the runner all read.
+
+A file becomes a MuJoCo model in exactly one way, `asset_spec`: a URDF has its
+`package://` and relative mesh paths resolved and MuJoCo's URDF import told to keep visual
+geoms and static links (FIELD-NOTES in docs/assets.md); an MJCF has its asset paths made
+absolute, so the model can be attached into any scene and saved anywhere. Inertias that
+break the triangle inequality (the xArm's link2) are balanced by MuJoCo
+(`compiler.balanceinertia`); `ArticulatedAsset.notes` says so once.
+
+Foundation module: imported by every layer, it imports mujoco only inside functions.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Sequence
+
+from prsc.errors import PrscError
+
+ASSET_SUFFIXES = (".urdf", ".xml", ".mjcf")
+"""File names that make `model "..."` a file of the user's own rather than a library name."""
+
+JOINT_KINDS = {3: "revolute", 2: "prismatic"}
+"""MuJoCo joint types (mjJNT_HINGE, mjJNT_SLIDE) the description keeps, by URDF name."""
+
+
+def names_asset_file(model: object) -> bool:
+    """Whether a `model` value names a URDF or MJCF file (else it is a library asset name)."""
+    return isinstance(model, str) and model.strip().lower().endswith(ASSET_SUFFIXES)
+
+
+@dataclass(frozen=True)
+class AssetJoint:
+    """One joint of an articulated asset: its kind, limits and starting value."""
+
+    name: str
+    kind: str  # "revolute" (rad) or "prismatic" (m)
+    lower: float  # -inf/inf when the joint has no limits
+    upper: float
+    home: float  # the file's `home` keyframe value, else 0 clipped into the limits
+
+    def admits(self, value: float) -> bool:
+        """Whether `value` lies within the joint's limits (to 1e-9)."""
+        return self.lower - 1e-9 <= value <= self.upper + 1e-9
+
+
+@dataclass(frozen=True)
+class ArticulatedAsset:
+    """A URDF or MJCF asset as every stage sees it (lengths in m, angles in rad)."""
+
+    source: str  # absolute path of the file
+    digest: str  # sha256 of the file's bytes: the cache key of everything built from it
+    format: str  # "urdf" or "mjcf"
+    name: str  # the file's model name
+    root: str  # the root body (link)
+    links: tuple[str, ...]  # bodies (links), root first, in MuJoCo's order
+    joints: tuple[AssetJoint, ...]  # hinge and slide joints in qpos order
+    actuators: tuple[str, ...]
+    sites: tuple[str, ...]
+    tcp: str | None  # the tool frame: a site named `tcp`, else the last link of the longest chain
+    box_low: tuple[float, float, float]  # collision geometry's box about the root's origin, at home
+    box_high: tuple[float, float, float]
+    notes: tuple[str, ...] = ()  # what loading changed (balanced inertias), said once
+
+    @property
+    def key(self) -> str:
+        """`<stem>-<digest>`: names its folders in build and asset stores."""
+        return f"{Path(self.source).stem}-{self.digest[:10]}"
+
+    @property
+    def size(self) -> tuple[float, float, float]:
+        """The box's extent (width x, length y, height z) at scale 1."""
+        return tuple(h - l for l, h in zip(self.box_low, self.box_high))  # type: ignore[return-value]
+
+    @property
+    def root_offset(self) -> tuple[float, float, float]:
+        """The root frame's origin relative to the box centre, at scale 1."""
+        return tuple(-(l + h) / 2 for l, h in zip(self.box_low, self.box_high))  # type: ignore[return-value]
+
+    @property
+    def has_joints(self) -> bool:
+        """Whether the asset is articulated (fixed-base unless `static False`)."""
+        return bool(self.joints)
+
+    def joint(self, name: str) -> AssetJoint | None:
+        """The joint called `name`, or None."""
+        return next((j for j in self.joints if j.name == name), None)
+
+    def home(self, overrides: dict[str, float] | None = None) -> dict[str, float]:
+        """Every joint's starting value, by name: the file's home, then `overrides`."""
+        values = {j.name: j.home for j in self.joints}
+        values.update(overrides or {})
+        return values
+
+
+def resolve_asset_file(raw: str, folders: Sequence[str]) -> Path:
+    """The asset file `raw` names, looked up like meshes, or a PrscError saying where it looked."""
+    from prsc.mesh_paths import resolve_mesh
+
+    try:
+        return resolve_mesh(raw, folders, anywhere=True)
+    except PrscError as error:
+        raise PrscError(error.message.replace("mesh file", "asset file").replace("mesh path", "asset path")) from None
+
+
+def _package_path(uri: str, urdf: Path, folders: Sequence[str]) -> str:
+    """The file a `package://NAME/rest` names: folder NAME beside the URDF or in an ancestor,
+    then in the --include folders."""
+    name, _, rest = uri[len("package://"):].partition("/")
+    for base in (urdf.parent, *urdf.parent.parents, *map(Path, folders)):
+        if (base / name).is_dir():
+            return str(base / name / rest)
+    raise PrscError(f"{urdf.name}: {uri!r} does not resolve: no folder {name!r} beside the URDF, "
+                    "in its parent folders or in the --include folders")
+
+
+def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
+    """The URDF's root element with every mesh path absolute (`package://` resolved)."""
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as error:
+        raise PrscError(f"cannot read URDF {path.name}: {error}") from None
+    if root.tag != "robot":
+        raise PrscError(f"{path.name} is not a URDF (its root element is <{root.tag}>, not <robot>)")
+    for mesh in root.iter("mesh"):
+        filename = mesh.get("filename", "")
+        if filename.startswith("package://"):
+            filename = _package_path(filename, path, folders)
+        elif filename.startswith("file://"):
+            filename = filename[len("file://"):]
+        filename = str((path.parent / filename).resolve())
+        if not os.path.isfile(filename):
+            raise PrscError(f"{path.name}: mesh {mesh.get('filename')!r} not found ({filename})")
+        mesh.set("filename", filename)
+    # A root link named "world" fixed to one child is ROS's way of saying "fixed base";
+    # prsc mounts the asset itself, so the child is the root in every format.
+    world = [j for j in root.findall("joint") if j.find("parent") is not None and j.find("parent").get("link") == "world"]
+    if len(world) == 1 and world[0].get("type") == "fixed":
+        root.remove(world[0])
+        for link in root.findall("link"):
+            if link.get("name") == "world":
+                root.remove(link)
+    return root
+
+
+def urdf_with_absolute_paths(path: Path, folders: Sequence[str] = ()) -> str:
+    """The URDF's text with every mesh path absolute, for any URDF reader."""
+    return '<?xml version="1.0"?>\n' + ET.tostring(_urdf_tree(path, folders), encoding="unicode") + "\n"
+
+
+def _urdf_text(path: Path, folders: Sequence[str]) -> str:
+    """The URDF with absolute mesh paths and MuJoCo's import told to keep visuals and links."""
+    root = _urdf_tree(path, folders)
+    for extension in root.findall("mujoco"):
+        root.remove(extension)
+    extension = ET.SubElement(root, "mujoco")
+    ET.SubElement(extension, "compiler", strippath="false", discardvisual="false", fusestatic="false",
+                  balanceinertia="true", angle="radian")
+    return ET.tostring(root, encoding="unicode")
+
+
+def _absolute_asset_paths(spec, path: Path) -> None:
+    """Make an MJCF's mesh, texture and height-field files absolute (attach drops meshdir)."""
+    folder = path.parent
+    for items, subfolder in ((spec.meshes, spec.meshdir), (spec.textures, spec.texturedir), (spec.hfields, "")):
+        for item in items:
+            if item.file and not os.path.isabs(item.file):
+                item.file = str((folder / (subfolder or "") / item.file).resolve())
+    spec.meshdir = ""
+    spec.texturedir = ""
+
+
+def asset_spec(path: Path | str, folders: Sequence[str] = ()):
+    """A fresh `mujoco.MjSpec` of an asset file, ready to attach (the one file-to-model path)."""
+    import mujoco
+
+    path = Path(path)
+    try:
+        if path.suffix.lower() == ".urdf":
+            spec = mujoco.MjSpec.from_string(_urdf_text(path, folders))
+        else:
+            spec = mujoco.MjSpec.from_file(str(path))
+            _absolute_asset_paths(spec, path)
+            spec.compiler.balanceinertia = True
+    except ValueError as error:  # MuJoCo's parse errors
+        raise PrscError(f"cannot load {path.name} in MuJoCo: {str(error).strip().splitlines()[0]}") from None
+    return spec
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def describe_asset(path: Path | str, folders: Sequence[str] = ()) -> ArticulatedAsset:
+    """The description of an asset file (cached while the file is unchanged)."""
+    path = Path(path).resolve()
+    try:
+        stat = os.stat(path)
+    except OSError as error:
+        raise PrscError(f"cannot read {path}: {error.strerror}") from None
+    return _describe(str(path), stat.st_mtime_ns, stat.st_size, tuple(folders))
+
+
+@lru_cache(maxsize=64)
+def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -> ArticulatedAsset:
+    import mujoco
+    import numpy as np
+
+    path = Path(source)
+    spec = asset_spec(path, folders)
+    try:
+        model = spec.compile()
+    except ValueError as error:
+        raise PrscError(f"cannot load {path.name} in MuJoCo: {str(error).strip().splitlines()[0]}") from None
+    roots = [b for b in range(1, model.nbody) if model.body_parentid[b] == 0]
+    if len(roots) != 1:
+        raise PrscError(f"{path.name} has {len(roots)} root bodies; an asset is one tree with one root")
+    root = roots[0]
+    if any(model.jnt_type[j] in (0, 1) for j in range(model.njnt)):  # free or ball joints
+        raise PrscError(f"{path.name}: only revolute and prismatic joints are supported (it has a free or ball joint)")
+    home_key = next((k for k in range(model.nkey) if model.key(k).name == "home"), None)
+    qpos = model.key_qpos[home_key].copy() if home_key is not None else model.qpos0.copy()
+    joints = []
+    for j in range(model.njnt):
+        lower, upper = (float(v) for v in model.jnt_range[j]) if model.jnt_limited[j] else (-math.inf, math.inf)
+        value = float(qpos[model.jnt_qposadr[j]])
+        if home_key is None:
+            value = min(max(0.0, lower), upper)
+            qpos[model.jnt_qposadr[j]] = value
+        joints.append(AssetJoint(model.joint(j).name, JOINT_KINDS[int(model.jnt_type[j])], lower, upper, value))
+    data = mujoco.MjData(model)
+    data.qpos[:] = qpos
+    mujoco.mj_kinematics(model, data)
+    geoms = [g for g in range(model.ngeom) if model.geom_contype[g] or model.geom_conaffinity[g]] or list(range(model.ngeom))
+    if not geoms:
+        raise PrscError(f"{path.name} has no geometry")
+    # The box is axis-aligned in the file's own axes, about the root body's origin: an MJCF
+    # root that is turned in its file stays turned in every scene.
+    root_pos = data.xpos[root]
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    points = []
+    for g in geoms:
+        centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+        local = centre + corners * half
+        world = data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T
+        points.append(world - root_pos)
+    points = np.concatenate(points)
+    links = tuple(model.body(b).name for b in range(1, model.nbody))
+    sites = tuple(model.site(s).name for s in range(model.nsite))
+    notes = ()
+    if path.suffix.lower() == ".urdf" or spec.compiler.balanceinertia:
+        notes = (f"{path.name}: inertias that break the triangle inequality are balanced (MuJoCo balanceinertia)",)
+    return ArticulatedAsset(
+        source=source, digest=_digest(path), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
+        name=spec.modelname or path.stem, root=model.body(root).name, links=links, joints=tuple(joints),
+        actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
+        tcp=_tool_frame(model, sites), box_low=tuple(float(v) for v in points.min(axis=0)),  # type: ignore[arg-type]
+        box_high=tuple(float(v) for v in points.max(axis=0)), notes=notes,  # type: ignore[arg-type]
+    )
+
+
+def _tool_frame(model, sites: tuple[str, ...]) -> str | None:
+    """A site named `tcp`, else the last body of the longest chain (None without joints)."""
+    if "tcp" in sites:
+        return "tcp"
+    if model.njnt == 0:
+        return None
+    depth = {0: 0}
+    for b in range(1, model.nbody):
+        depth[b] = depth[int(model.body_parentid[b])] + 1
+    deepest = max(range(1, model.nbody), key=lambda b: (depth[b], -b))
+    return model.body(deepest).name

@@ -1,0 +1,117 @@
+"""Objects whose `model` is the user's own URDF or MJCF file (docs/assets.md): the file is
+found and loaded here, at the line that names it, so `prsc check` reports what `compile`
+would; the object's box becomes the file's, an articulated asset is fixed-base unless it
+says `static False`, and every `with joint "NAME" v` is checked against the file's joints."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Sequence
+
+from prsc.asset_files import ArticulatedAsset, describe_asset, names_asset_file, resolve_asset_file
+from prsc.errors import PrscError
+from prsc.ir import model as ir
+from prsc.ir.builtins import BUILTIN_SPAN, joint_name, joint_property
+from prsc.ir.checks import SIZES
+from prsc.ir.program import ClassDef, ObjectDecl, Program
+from prsc.ir.scope import did_you_mean
+from prsc.mesh_paths import mesh_folders
+
+
+def _declared_in(classes: dict[str, ClassDef], class_name: str, prop: str, span) -> str | None:
+    """The class of the chain (most derived first) whose own body wrote `prop` at `span`."""
+    cls = classes.get(class_name)
+    while cls is not None:
+        parent = classes.get(cls.parent) if cls.parent else None
+        own = dict(cls.defaults).get(prop)
+        inherited = dict(parent.defaults).get(prop) if parent is not None else None
+        if own is not None and own.span == span and (inherited is None or inherited.span != span):
+            return cls.name
+        cls = parent
+    return None
+
+
+def _constant_range(expr: ir.Expr) -> tuple[float, float] | None:
+    """(low, high) of a constant value or a uniform range of constants, else None."""
+    if isinstance(expr, ir.Const) and isinstance(expr.value, (int, float)) and not isinstance(expr.value, bool):
+        return float(expr.value), float(expr.value)
+    if isinstance(expr, ir.Distribution) and expr.kind == "uniform" and len(expr.args) == 2:
+        ends = [_constant_range(a) for a in expr.args]
+        if all(e is not None for e in ends):
+            return ends[0][0], ends[1][0]  # type: ignore[index]
+    return None
+
+
+def _check_joint(obj: ObjectDecl, asset: ArticulatedAsset, joint: str, value: ir.Expr) -> None:
+    """An error at `value` when `joint` is not the asset's or the value leaves its limits."""
+    found = asset.joint(joint)
+    if found is None:
+        names = [j.name for j in asset.joints]
+        raise PrscError(f"{obj.name}: {asset.name} has no joint {joint!r}{did_you_mean(joint, names)} "
+                        f"(its joints: {', '.join(names) or 'none'})", value.span)
+    ends = _constant_range(value)
+    if ends is not None and not (found.admits(ends[0]) and found.admits(ends[1])):
+        unit = "rad" if found.kind == "revolute" else "m"
+        raise PrscError(f"{obj.name}: joint {joint!r} value {ends[0]:g}" + (f"..{ends[1]:g}" if ends[1] != ends[0] else "")
+                        + f" {unit} is outside its limits [{found.lower:g}, {found.upper:g}] {unit}", value.span)
+
+
+def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: dict[str, ClassDef]) -> ObjectDecl:
+    """`obj` with the file's box, its base and its joints checked."""
+    try:
+        path = resolve_asset_file(str(model.value), folders)
+        asset = describe_asset(path, folders)
+    except PrscError as error:
+        raise PrscError(f"{obj.name}: {error.message}", model.span) from None
+    props = dict(obj.properties)
+    if props.get("scale") is not None:
+        raise PrscError(f"{obj.name}: `scale` is not supported for a URDF or MJCF asset; it keeps the file's size",
+                        props["scale"].span)
+    model_class = _declared_in(classes, obj.class_name, "model", model.span)
+    for size, extent in zip(SIZES, asset.size):
+        written = props.get(size)
+        if written is not None and written.span.path != BUILTIN_SPAN.path:
+            in_object = written.span.path == obj.span.path and obj.span.line <= written.span.line <= obj.span.end_line
+            in_own_class = model_class is not None and _declared_in(classes, obj.class_name, size, written.span) == model_class
+            if in_object or in_own_class:
+                raise PrscError(f"{obj.name}: the {size} of an asset from a file is the file's ({extent:.4g} m); "
+                                f"remove `{size}`", written.span)
+        props[size] = ir.Const(model.span, ir.Type.SCALAR, extent)
+    static = props.get("static")
+    if asset.has_joints and (static is None or static.span.path == BUILTIN_SPAN.path):
+        props["static"] = ir.Const(model.span, ir.Type.BOOL, True)
+    for prop, value in obj.properties:
+        joint = joint_name(prop)
+        if joint is not None:
+            _check_joint(obj, asset, joint, value)
+    # Joints the spec leaves unset start at the file's home: the scene records every joint.
+    order = [name for name in dict(obj.properties) if joint_name(name) is None]
+    for joint in asset.joints:
+        prop = joint_property(joint.name)
+        if prop not in props:
+            props[prop] = ir.Const(model.span, ir.Type.SCALAR, joint.home)
+        order.append(prop)
+    return replace(obj, properties=tuple((name, props[name]) for name in order))
+
+
+def _no_file_joints(obj: ObjectDecl) -> None:
+    """`with joint` on an object whose model is not a file is an error at the first one."""
+    for prop, value in obj.properties:
+        if joint_name(prop) is not None:
+            raise PrscError(f"{obj.name}: `with joint` needs an object whose model is a URDF or MJCF file",
+                            value.span)
+
+
+def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Program:
+    """The program with every file-model object fitted to its file (box, base, joints)."""
+    folders = mesh_folders(program.path, include_dirs)
+    classes = {c.name: c for c in program.classes}
+    objects = []
+    for obj in program.objects:
+        model = obj.prop("model")
+        if isinstance(model, ir.Const) and names_asset_file(model.value):
+            obj = _fitted(obj, model, folders, classes)
+        else:
+            _no_file_joints(obj)
+        objects.append(obj)
+    return replace(program, objects=tuple(objects))
