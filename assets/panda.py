@@ -102,8 +102,9 @@ def _repo_root() -> Path:
 
 def build_dir() -> Path:
     """The asset build folder: `$PRSC_BUILD_DIR/assets`, default `<repo>/build/assets`."""
-    root = os.environ.get("PRSC_BUILD_DIR")
-    return (Path(root) if root else _repo_root() / "build") / "assets"
+    from prsc.asset_files import build_root
+
+    return build_root() / "assets"
 
 
 def _cache_dir() -> Path:

@@ -32,6 +32,12 @@ JOINT_KINDS = {3: "revolute", 2: "prismatic"}
 """MuJoCo joint types (mjJNT_HINGE, mjJNT_SLIDE) the description keeps, by URDF name."""
 
 
+def build_root() -> Path:
+    """prsc's build folder for converted assets and caches: `$PRSC_BUILD_DIR`, default `<repo>/build`."""
+    root = os.environ.get("PRSC_BUILD_DIR")
+    return Path(root) if root else Path(__file__).resolve().parents[1] / "build"
+
+
 def names_asset_file(model: object) -> bool:
     """Whether a `model` value names a URDF or MJCF file (else it is a library asset name)."""
     return isinstance(model, str) and model.strip().lower().endswith(ASSET_SUFFIXES)

@@ -16,7 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
+from prsc.asset_files import describe_asset, names_asset_file
 from prsc.constraints.values import ObjectValue
+from prsc.ir.models import model_of
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope
 
@@ -39,20 +41,37 @@ def reach_file(model: str) -> Path:
     return DATA / f"{model}_reach.json"
 
 
-def known_models() -> list[str]:
-    """Robot models with reachable-set data."""
-    return sorted(p.name[: -len("_reach.json")] for p in DATA.glob("*_reach.json"))
+
+def _rows_file_arm(robot: ObjectValue, path: str, label: int, span: Span | None) -> Polytope:
+    """`reachable by` an arm from a file: its cell in its root frame, moved to the root's pose."""
+    from prsc.constraints.arm_reach import arm_reach_cell
+
+    asset = describe_asset(path)
+    if not asset.has_joints:
+        raise PrscError(f"'reachable by' needs a robot: {robot.name}'s model {asset.name!r} has no joints", span)
+    try:
+        cell = arm_reach_cell(asset)
+    except ValueError as error:
+        raise PrscError(f"'reachable by' {robot.name}: {error}", span) from None
+    if robot.position is None or robot.rotation is None or robot.dims is None:
+        raise PrscError(f"{robot.name} is not placed yet here", span)
+    rot = robot.rotation
+    root = robot.position + rot @ np.array(asset.root_offset)
+    a = cell.a @ rot.T
+    return Polytope(a, cell.b + a @ root, np.zeros((0, 3)), np.zeros(0), np.full(len(a), label), np.zeros(0, np.int64))
 
 
 def rows_reachable(robot: object, label: int, span: Span | None) -> Polytope:
     """`reachable by R`: p in R's reachable cell, moved to R's pose (base = centre - height/2 along R's z)."""
     if not isinstance(robot, ObjectValue):
         raise PrscError("'reachable by' needs a robot object", span)
-    model = robot.props.get("model")
+    model = model_of(robot.props, robot.class_name)
+    if names_asset_file(model):
+        return _rows_file_arm(robot, str(model), label, span)
     cell = reach_cell(model) if isinstance(model, str) else None
     if cell is None:
-        models = ", ".join(known_models()) or "none"
-        raise PrscError(f"'reachable by' has no reachable-set data for {robot.name}'s model {model!r} (known: {models})", span)
+        raise PrscError(f"'reachable by' needs a robot (the Panda, or an arm from a URDF or MJCF file: "
+                        f"docs/assets.md); {robot.name}'s model is {model!r}", span)
     if robot.position is None or robot.rotation is None or robot.dims is None:
         raise PrscError(f"{robot.name} is not placed yet here", span)
     a_local, b_local = cell

@@ -35,10 +35,11 @@ def _constant_range(expr: ir.Expr) -> tuple[float, float] | None:
     """(low, high) of a constant value or a uniform range of constants, else None."""
     if isinstance(expr, ir.Const) and isinstance(expr.value, (int, float)) and not isinstance(expr.value, bool):
         return float(expr.value), float(expr.value)
-    if isinstance(expr, ir.Distribution) and expr.kind == "uniform" and len(expr.args) == 2:
-        ends = [_constant_range(a) for a in expr.args]
-        if all(e is not None for e in ends):
-            return ends[0][0], ends[1][0]  # type: ignore[index]
+    if isinstance(expr, ir.Distribution) and expr.kind in ("range", "uniform", "discrete"):
+        items = expr.args[0].items if len(expr.args) == 1 and isinstance(expr.args[0], ir.ListExpr) else expr.args
+        ends = [_constant_range(a) for a in items if isinstance(a, ir.Expr)]
+        if ends and all(e is not None for e in ends):
+            return min(e[0] for e in ends), max(e[1] for e in ends)  # type: ignore[index]
     return None
 
 
@@ -64,6 +65,8 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
     except PrscError as error:
         raise PrscError(f"{obj.name}: {error.message}", model.span) from None
     props = dict(obj.properties)
+    # Found once, here: every later stage and the backends read the file this names.
+    props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
     if props.get("scale") is not None:
         raise PrscError(f"{obj.name}: `scale` is not supported for a URDF or MJCF asset; it keeps the file's size",
                         props["scale"].span)

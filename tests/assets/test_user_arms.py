@@ -1,0 +1,255 @@
+"""The user's own arms (docs/assets.md): the xArm6 and KUKA iiwa URDFs that pybullet ships,
+and a small actuated MJCF arm written here, compiled through the CLI to every format.
+
+- MJCF: every joint arrives, the `home` key holds the scene's joint values, and over 1 s
+  of simulation the arm holds them (servos, or gravity compensation where the file has no
+  actuators) while the cubes around it stay put;
+- the URDF bundle loads in pybullet with every joint, and its scene.json states where each
+  starts; pybullet's SDF import loads the arm with its joints; the USD validates and holds
+  a revolute joint per arm joint under one articulation root;
+- `reachable by` cubes are reached top-down by an IK solve on the compiled MuJoCo model
+  (scipy's least squares, not prsc's own IK) within 5 mm and 0.05 rad.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.backends import readback
+
+pybullet_data = pytest.importorskip("pybullet_data")
+DATA = Path(pybullet_data.getDataPath())
+SCENES = 4
+REACH_SCENES = 20
+
+MJCF_ARM = """\
+<mujoco model="lab_arm">
+  <compiler angle="degree"/>
+  <default><joint damping="2" armature="0.01"/><geom rgba="0.2 0.4 0.8 1"/></default>
+  <worldbody>
+    <body name="pedestal">
+      <geom type="cylinder" size="0.06 0.05" pos="0 0 0.05"/>
+      <body name="shoulder" pos="0 0 0.1">
+        <joint name="yaw" axis="0 0 1" range="-170 170"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.2" size="0.04"/>
+        <body name="upper" pos="0 0 0.2">
+          <joint name="pitch" axis="0 1 0" range="-100 100"/>
+          <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.035"/>
+          <body name="fore" pos="0.3 0 0">
+            <joint name="elbow" axis="0 1 0" range="-150 150"/>
+            <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.03"/>
+            <body name="wrist" pos="0.25 0 0" euler="0 90 0">
+              <joint name="wrist" axis="0 1 0" range="-120 120"/>
+              <geom type="box" size="0.03 0.03 0.03"/>
+              <site name="tcp" pos="0 0 0.05"/>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="yaw" joint="yaw" kp="2000" kv="100"/>
+    <position name="pitch" joint="pitch" kp="4000" kv="200"/>
+    <position name="elbow" joint="elbow" kp="3000" kv="150"/>
+    <position name="wrist" joint="wrist" kp="1000" kv="50"/>
+  </actuator>
+  <keyframe><key name="home" qpos="0 -0.5 1.2 0.9"/></keyframe>
+</mujoco>
+"""
+
+ARMS = {
+    "xarm6": ("xarm/xarm6_robot.urdf", 6, 'with joint "joint2" (-0.3, 0.3), with joint "joint3" -0.6'),
+    "kuka_iiwa": ("kuka_iiwa/model.urdf", 7, 'with joint "lbr_iiwa_joint_4" 0.5 deg'),
+    "lab_arm": ("arm.xml", 4, 'with joint "yaw" (-0.5, 0.5)'),
+}
+
+
+def _spec(folder: Path, model: str, joints: str) -> Path:
+    spec = folder / "arm.prs"
+    spec.write_text(textwrap.dedent(f"""\
+        from tabletop import *
+        table = Table on Vector3D(0, 0, 0), with width 1.8, with length 1.2, with height 0.75
+        class Arm(Robot):
+            model: "{model}"
+        arm = Arm on (top back table).position + Vector3D(0, 0.25, 0), {joints}
+        c1 = Cube completely on table, reachable by arm
+        c2 = Cube completely on table, reachable by arm
+        c3 = Cube completely on table, reachable by arm
+        """))
+    return spec
+
+
+def _prsc(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "prsc.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module", params=sorted(ARMS))
+def arm_output(request, tmp_path_factory):
+    name = request.param
+    folder = tmp_path_factory.mktemp(name)
+    if name == "lab_arm":
+        (folder / "arm.xml").write_text(MJCF_ARM)
+    model, joints, setting = ARMS[name]
+    spec = _spec(folder, model, setting)
+    out = folder / "out"
+    done = _prsc("compile", str(spec), "-I", str(DATA), "-n", str(SCENES), "--target", "json,mjcf,urdf,sdf,usd",
+                 "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    root = out / "arm"
+    scenes = [json.loads((root / "json" / f"{k:05d}.json").read_text()) for k in range(SCENES)]
+    return name, joints, root, scenes
+
+
+def _arm(scene: dict) -> dict:
+    return next(o for o in scene["objects"] if o["name"] == "arm")
+
+
+def test_mjcf_has_every_joint_and_holds_the_scene_joint_values(arm_output):
+    import mujoco
+
+    name, joints, root, scenes = arm_output
+    for k, scene in enumerate(scenes):
+        model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
+        data = mujoco.MjData(model)
+        arm_joints = [model.joint(j).name for j in range(model.njnt) if model.joint(j).name.startswith("arm/")]
+        assert len(arm_joints) == joints
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        wanted = _arm(scene)["joints"]
+        assert sorted(wanted) == sorted(j[len("arm/"):] for j in arm_joints)
+        adr = {j: model.jnt_qposadr[model.joint(f"arm/{j}").id] for j in wanted}
+        assert all(abs(data.qpos[adr[j]] - v) < 1e-9 for j, v in wanted.items())
+        mujoco.mj_forward(model, data)
+        cubes = {o["name"]: data.body(o["name"]).xpos.copy() for o in scene["objects"] if o["name"].startswith("c")}
+        while data.time < 1.0:
+            mujoco.mj_step(model, data)
+        drift = max(abs(data.qpos[adr[j]] - v) for j, v in wanted.items())
+        assert drift < 0.02, f"{name} scene {k}: the arm left its home pose by {drift:.3f} rad"
+        moved = max(np.linalg.norm(data.body(c).xpos - p) for c, p in cubes.items())
+        assert moved < 1e-3, f"{name} scene {k}: a cube moved {moved * 1000:.1f} mm"
+
+
+def test_urdf_bundle_sdf_and_usd_carry_every_joint(arm_output):
+    import pybullet
+
+    from pxr import Usd, UsdPhysics
+
+    name, joints, root, scenes = arm_output
+    folder = root / "urdf" / "00000"
+    bundle = json.loads((folder / "scene.json").read_text())
+    entry = next(o for o in bundle["objects"] if o["name"] == "arm")
+    assert entry["joints"] == _arm(scenes[0])["joints"]
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        body = pybullet.loadURDF(str(folder / entry["urdf"]), entry["base_position"], entry["base_orientation_xyzw"],
+                                 useFixedBase=True, physicsClientId=client)
+        movable = [pybullet.getJointInfo(body, j, physicsClientId=client)[1].decode()
+                   for j in range(pybullet.getNumJoints(body, physicsClientId=client))
+                   if pybullet.getJointInfo(body, j, physicsClientId=client)[2] != pybullet.JOINT_FIXED]
+        assert sorted(movable) == sorted(entry["joints"])
+        models = pybullet.loadSDF(str(root / "sdf" / "00000.sdf"), physicsClientId=client)
+        counts = [sum(pybullet.getJointInfo(m, j, physicsClientId=client)[2] != pybullet.JOINT_FIXED
+                      for j in range(pybullet.getNumJoints(m, physicsClientId=client))) for m in models]
+        assert joints in counts
+    finally:
+        pybullet.disconnect(client)
+    readback.urdf_validate(folder)
+    usd = root / "usd" / "00000.usda"
+    assert readback.usd_errors(usd) == []
+    stage = Usd.Stage.Open(str(usd))
+    revolute = [p for p in stage.Traverse() if p.IsA(UsdPhysics.RevoluteJoint) and "/arm/" in str(p.GetPath())]
+    assert len(revolute) == joints
+    assert any(p.HasAPI(UsdPhysics.ArticulationRootAPI) and "/arm/" in str(p.GetPath()) for p in stage.Traverse())
+
+
+def _top_down_ik(model, data, tool, is_site: bool, qadr: np.ndarray, target: np.ndarray, start: np.ndarray):
+    """Joint values putting the tool at `target` with its +z down (scipy least squares)."""
+    import mujoco
+    from scipy.optimize import least_squares
+
+    lower, upper = model.jnt_range[qadr_joint(model, qadr)].T
+
+    def residual(q):
+        data.qpos[qadr] = q
+        mujoco.mj_kinematics(model, data)
+        position = data.site_xpos[tool] if is_site else data.xpos[tool]
+        rotation = (data.site_xmat[tool] if is_site else data.xmat[tool]).reshape(3, 3)
+        return np.concatenate([position - target, 0.2 * (rotation[:, 2] + np.array([0.0, 0.0, 1.0]))])
+
+    best = None
+    for seed in (start, start + 0.4, start - 0.4):
+        fit = least_squares(residual, np.clip(seed, lower + 1e-6, upper - 1e-6), bounds=(lower, upper), xtol=1e-12,
+                            ftol=1e-12, gtol=1e-12)
+        if best is None or fit.cost < best.cost:
+            best = fit
+        if best.cost < 1e-10:
+            break
+    return best.x
+
+
+def qadr_joint(model, qadr: np.ndarray) -> np.ndarray:
+    return np.array([int(np.flatnonzero(model.jnt_qposadr == a)[0]) for a in qadr])
+
+
+def test_reachable_cubes_are_reached_top_down_on_the_compiled_model(arm_output, tmp_path):
+    import mujoco
+
+    from prsc.asset_files import describe_asset
+
+    name, joints, root, _ = arm_output
+    spec = root.parent.parent / "arm.prs"
+    out = tmp_path / "reach"
+    done = _prsc("compile", str(spec), "-I", str(DATA), "-n", str(REACH_SCENES), "--target", "json,mjcf", "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    farthest = 0.0
+    for k in range(REACH_SCENES):
+        scene = json.loads((out / "arm" / "json" / f"{k:05d}.json").read_text())
+        asset = describe_asset(_arm(scene)["model"])
+        model = mujoco.MjModel.from_xml_path(str(out / "arm" / "mjcf" / f"{k:05d}.xml"))
+        data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        is_site = asset.tcp in asset.sites
+        tool = (model.site if is_site else model.body)(f"arm/{asset.tcp}").id
+        qadr = np.array([model.jnt_qposadr[model.joint(f"arm/{j.name}").id] for j in asset.joints])
+        base = data.body(f"arm/{asset.root}").xpos.copy()
+        for cube in (o for o in scene["objects"] if o["name"].startswith("c")):
+            target = np.array(cube["position"])
+            q = _top_down_ik(model, data, tool, is_site, qadr, target, np.array([j.home for j in asset.joints]))
+            data.qpos[qadr] = q
+            mujoco.mj_kinematics(model, data)
+            position = data.site_xpos[tool] if is_site else data.xpos[tool]
+            axis = (data.site_xmat[tool] if is_site else data.xmat[tool]).reshape(3, 3)[:, 2]
+            error, angle = np.linalg.norm(position - target), np.arccos(min(1.0, -axis[2]))
+            assert error < 0.005 and angle < 0.05, f"{name} scene {k} {cube['name']}: {error * 1000:.1f} mm, {angle:.3f} rad"
+            farthest = max(farthest, float(np.linalg.norm((target - base)[:2])))
+    if name == "xarm6":
+        assert farthest >= 0.45, f"the farthest reachable cube is {farthest:.3f} m from the xArm's base"
+
+
+def test_the_reach_check_fails_on_a_cube_out_of_reach(arm_output):
+    """The IK above is not vacuous: a point 2 m from the base is not reached."""
+    import mujoco
+
+    from prsc.asset_files import describe_asset
+
+    name, joints, root, scenes = arm_output
+    asset = describe_asset(_arm(scenes[0])["model"])
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    is_site = asset.tcp in asset.sites
+    tool = (model.site if is_site else model.body)(f"arm/{asset.tcp}").id
+    qadr = np.array([model.jnt_qposadr[model.joint(f"arm/{j.name}").id] for j in asset.joints])
+    mujoco.mj_kinematics(model, data)
+    target = data.body(f"arm/{asset.root}").xpos + np.array([2.0, 0.0, 0.0])
+    q = _top_down_ik(model, data, tool, is_site, qadr, target, np.array([j.home for j in asset.joints]))
+    data.qpos[qadr] = q
+    mujoco.mj_kinematics(model, data)
+    position = data.site_xpos[tool] if is_site else data.xpos[tool]
+    assert np.linalg.norm(position - target) > 0.5
