@@ -198,6 +198,102 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     }
 
 
+def _reached_area(rays: list, height: float) -> float:
+    """The area the tool reaches top-down over the half ahead at `height`, from the rays
+    (each sector between two rays an annulus sector with their mean radii)."""
+    at = sorted((r[1], r[2], r[3]) for r in rays if r[0] == height and r[2] is not None)
+    return sum((b[0] - a[0]) * (((a[2] + b[2]) / 2) ** 2 - ((a[1] + b[1]) / 2) ** 2) / 2 for a, b in zip(at, at[1:]))
+
+
+def _cell_polygon(a: np.ndarray, b: np.ndarray, height: float) -> np.ndarray:
+    """Corners (x, y) of the cell's cut at `height`, in order."""
+    from scipy.spatial import ConvexHull, HalfspaceIntersection
+
+    rows = a[:, :2]
+    offsets = b - a[:, 2] * height
+    keep = np.linalg.norm(rows, axis=1) > 1e-12
+    halfspaces = np.hstack([rows[keep], -offsets[keep, None]])
+    from scipy.optimize import linprog
+
+    # An interior point: the centre of the largest disc in the cut (Chebyshev centre).
+    norms = np.linalg.norm(rows[keep], axis=1)
+    fit = linprog([0, 0, -1], A_ub=np.hstack([rows[keep], norms[:, None]]), b_ub=offsets[keep],
+                  bounds=[(None, None), (None, None), (0, None)])
+    inside = fit.x[:2]
+    corners = HalfspaceIntersection(halfspaces, inside).intersections
+    return corners[ConvexHull(corners).vertices]
+
+
+def add_parser(sub) -> None:
+    """`prsc reach ARM_FILE`: build an arm's top-down reachable cell, report its coverage, draw it."""
+    parser = sub.add_parser("reach", help="build a URDF/MJCF arm's `reachable by` cell; report its coverage; draw it",
+                            description=add_parser.__doc__)
+    parser.add_argument("arm", help="the arm's URDF or MJCF file")
+    parser.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
+                        help="folders where `package://` names are looked up")
+    parser.add_argument("--plot", metavar="PNG", help="draw the reach and the cell at the table plane into PNG")
+
+
+def run(args) -> int:
+    """Build (or read from the cache) the arm's cell and print what it keeps."""
+    import time
+
+    from prsc.asset_files import describe_asset
+    from prsc.constraints.arm_reach import HEIGHTS, arm_reach_cell, reach_cache
+    from prsc.errors import PrscError
+
+    if not Path(args.arm).is_file():
+        raise PrscError(f"no file {args.arm}")
+    asset = describe_asset(args.arm, args.include)
+    if not asset.has_joints:
+        raise PrscError(f"{args.arm} has no joints: not an arm")
+    cached = reach_cache(asset).is_file()
+    start = time.process_time()
+    try:
+        cell = arm_reach_cell(asset)
+    except ValueError as error:
+        raise PrscError(f"{args.arm}: {error}") from None
+    seconds = time.process_time() - start
+    print(f"{asset.name}: {len(asset.joints)} joints, tool {asset.tcp}; cell of {len(cell.b)} rows "
+          f"({'read from the cache' if cached else f'built in {seconds:.1f} s of CPU'}): {reach_cache(asset)}")
+    for height in HEIGHTS:
+        reach = _reached_area(list(cell.rays), height)
+        corners = _cell_polygon(cell.a, cell.b, height)
+        x, y = corners[:, 0], corners[:, 1]
+        area = 0.5 * abs(float(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1))))
+        far = float(np.max(np.hypot(x, y)))
+        print(f"  {height:+.3f} m: the cell keeps {area:.3f} m^2 of the {reach:.3f} m^2 reached top-down over the "
+              f"half ahead ({100 * area / reach:.0f} %), farthest point {far:.3f} m from the base")
+    if args.plot:
+        _plot(cell, args.plot, asset.name)
+        print(f"drawn: {args.plot}")
+    return 0
+
+
+def _plot(cell, path: str, name: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(figsize=(6, 6))
+    height = min(r[0] for r in cell.rays)
+    for h, angle, inner, outer in cell.rays:
+        if h == height and inner is not None:
+            direction = np.array([math.cos(angle), math.sin(angle)])
+            axes.plot(*np.array([inner * direction, outer * direction]).T, color="0.6")
+    corners = _cell_polygon(cell.a, cell.b, height)
+    axes.fill(corners[:, 0], corners[:, 1], alpha=0.4, label="cell (`reachable by`)")
+    axes.plot([0], [0], "k+", label="base")
+    axes.set_aspect("equal")
+    axes.set_xlabel("x (m, ahead)")
+    axes.set_ylabel("y (m)")
+    axes.set_title(f"{name}: top-down reach at the base's height\n(grey: reached along each ray)", fontsize=10)
+    axes.legend(loc="lower left")
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
+
+
 def main() -> None:
     """Regenerate the data file, or report how much of a tray it keeps."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])

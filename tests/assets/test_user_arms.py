@@ -253,3 +253,11 @@ def test_the_reach_check_fails_on_a_cube_out_of_reach(arm_output):
     mujoco.mj_kinematics(model, data)
     position = data.site_xpos[tool] if is_site else data.xpos[tool]
     assert np.linalg.norm(position - target) > 0.5
+
+
+def test_the_example_spec_compiles_as_its_docstring_says(tmp_path):
+    spec = Path(__file__).resolve().parents[2] / "specs" / "pybullet_arm" / "xarm_cubes.prs"
+    done = _prsc("compile", str(spec), "--target", "json,mjcf", "-n", "2", "-I", str(DATA), "-o", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    scene = json.loads((tmp_path / "xarm_cubes" / "json" / "00001.json").read_text())
+    assert len(_arm(scene)["joints"]) == 6
