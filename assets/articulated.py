@@ -139,8 +139,12 @@ def _urdf_path(model: RobotModel) -> Path:
     return target
 
 
+@lru_cache(maxsize=32)
+def _link_names(model: RobotModel) -> frozenset[str]:
+    return frozenset(l.get("name") for l in ET.parse(model.urdf).getroot().findall("link"))
+
+
 def check_robot_name(model: RobotModel, object_name: str) -> None:
     """An error when an object is named like one of its own links (the mount link would clash)."""
-    links = {l.get("name") for l in ET.parse(model.urdf).getroot().findall("link")}
-    if object_name in links:
+    if object_name in _link_names(model):
         raise PrscError(f"robot object {object_name!r} has the name of one of its {model.key} links; rename it")

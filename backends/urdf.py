@@ -93,7 +93,6 @@ def _gazebo_camera(robot: ET.Element, body: Body) -> None:
     camera_sensor_body(ET.SubElement(gazebo, "sensor", type="camera", name=body.name), body.camera)
 
 
-@lru_cache(maxsize=16)
 @lru_cache(maxsize=32)
 def _robot_body_text(robot: RobotModel, store_root: str, store_from_bundle: str) -> tuple[str, ...]:
     """The robot URDF's top-level elements as text, mesh paths pointing into the store.

@@ -4,10 +4,10 @@ the backends and the runner all read.
 
 A file becomes a MuJoCo model in exactly one way, `asset_spec`: a URDF has its
 `package://` and relative mesh paths resolved and MuJoCo's URDF import told to keep visual
-geoms and static links (FIELD-NOTES in docs/assets.md); an MJCF has its asset paths made
-absolute, so the model can be attached into any scene and saved anywhere. Inertias that
-break the triangle inequality (the xArm's link2) are balanced by MuJoCo
-(`compiler.balanceinertia`); `ArticulatedAsset.notes` says so once.
+geoms and static links (docs/assets.md); an MJCF has its asset paths made absolute, so
+the model can be attached into any scene and saved anywhere. Inertias that break the
+triangle inequality (the xArm's link2) are balanced by MuJoCo (`compiler.balanceinertia`),
+in every file, as docs/assets.md says.
 
 Foundation module: imported by every layer, it imports mujoco only inside functions.
 """
@@ -74,7 +74,6 @@ class ArticulatedAsset:
     tcp: str | None  # the tool frame: a site named `tcp`, else the last link of the longest chain
     box_low: tuple[float, float, float]  # collision geometry's box about the root's origin, at home
     box_high: tuple[float, float, float]
-    notes: tuple[str, ...] = ()  # what loading changed (balanced inertias), said once
 
     @property
     def key(self) -> str:
@@ -261,15 +260,12 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
     points = np.concatenate(points)
     links = tuple(model.body(b).name for b in range(1, model.nbody))
     sites = tuple(model.site(s).name for s in range(model.nsite))
-    notes = ()
-    if path.suffix.lower() == ".urdf" or spec.compiler.balanceinertia:
-        notes = (f"{path.name}: inertias that break the triangle inequality are balanced (MuJoCo balanceinertia)",)
     return ArticulatedAsset(
         source=source, digest=_digest(path), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
         name=spec.modelname or path.stem, root=model.body(root).name, links=links, joints=tuple(joints),
         actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
         tcp=_tool_frame(model, sites), box_low=tuple(float(v) for v in points.min(axis=0)),  # type: ignore[arg-type]
-        box_high=tuple(float(v) for v in points.max(axis=0)), notes=notes,  # type: ignore[arg-type]
+        box_high=tuple(float(v) for v in points.max(axis=0)),  # type: ignore[arg-type]
     )
 
 
