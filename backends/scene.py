@@ -70,6 +70,20 @@ def _floats(value: Any, count: int, where: str) -> tuple[float, ...]:
     return tuple(out)
 
 
+def unit_quaternion(value: Any, where: str) -> tuple[float, float, float, float]:
+    """A w x y z quaternion of norm 1 (within 1e-6), normalised exactly as every backend reads it."""
+    quat = _floats(value, 4, where)
+    norm = math.sqrt(sum(q * q for q in quat))
+    if abs(norm - 1.0) > 1e-6:
+        raise _fail(where, f"expected a unit quaternion (w x y z), norm is {norm}")
+    return tuple(q / norm for q in quat)  # type: ignore[return-value]
+
+
+def scene_position(value: Any, where: str) -> tuple[float, float, float]:
+    """A position: three finite numbers."""
+    return _floats(value, 3, where)  # type: ignore[return-value]
+
+
 def _color(value: Any, where: str) -> tuple[float, float, float, float]:
     """An rgba colour in [0, 1]; an rgb triple gets alpha 1."""
     if isinstance(value, (list, tuple)) and len(value) == 3:
@@ -106,11 +120,7 @@ def _object(raw: Any, k: int) -> SceneObject:
     if not isinstance(name, str) or not name or "/" in name or not name.isprintable():
         raise _fail(where, f"invalid object name {name!r}")
     where = f"object {name!r}"
-    quat = _floats(raw.get("quaternion"), 4, f"{where}.quaternion")
-    norm = math.sqrt(sum(q * q for q in quat))
-    if abs(norm - 1.0) > 1e-6:
-        raise _fail(f"{where}.quaternion", f"expected a unit quaternion (w x y z), norm is {norm}")
-    quat = tuple(q / norm for q in quat)
+    quat = unit_quaternion(raw.get("quaternion"), f"{where}.quaternion")
     dims = _floats(raw.get("dimensions"), 3, f"{where}.dimensions")
     if any(d <= 0.0 for d in dims):
         raise _fail(f"{where}.dimensions", f"width, length and height must be positive, got {list(dims)}")
@@ -149,7 +159,7 @@ def _object(raw: Any, k: int) -> SceneObject:
     return SceneObject(
         name=name,
         cls=str(cls),
-        position=_floats(raw.get("position"), 3, f"{where}.position"),  # type: ignore[arg-type]
+        position=scene_position(raw.get("position"), f"{where}.position"),
         quaternion=quat,  # type: ignore[arg-type]
         dimensions=dims,  # type: ignore[arg-type]
         static=static,

@@ -7,74 +7,61 @@ without writing files:
     scene = scenario.scene(seed=0, index=7)     # scene JSON (docs/scene-json.md)
     model = prsc.mujoco_model(scene)            # a mujoco.MjModel, built in memory
 
+    model = scenario.model()                    # one model for every scene of the spec
+    data = mujoco.MjData(model)
+    scenario.apply(scenario.scene(0, 8), model, data)   # a reset, no recompiling
+
+    env = prsc.SceneEnv("specs/table_cube.prs")  # a gymnasium.Env (pip install 'prsc[gym]')
+
 Everything is imported on first use, so `import prsc` stays cheap.
 """
 
 from __future__ import annotations
 
 import os
-from functools import lru_cache
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
 if TYPE_CHECKING:
     import mujoco
 
-    from prsc.sampling import Sampler
+    from prsc.scenario import Scenario
 
-__all__ = ["load", "mjcf_text", "mujoco_model", "mujoco_spec"]
+__all__ = ["load", "mjcf_text", "mujoco_model", "mujoco_spec", "SceneEnv"]
 
 
-def load(path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = ()) -> Sampler:
+def load(path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = ()) -> Scenario:
     """Compile a .prs spec; `.scene(seed, index)` of the result draws scene JSON, as `prsc sample` does."""
     from prsc.sampling import compile_sampler
+    from prsc.scenario import Scenario
 
-    return compile_sampler(path, include_dirs=include_dirs)
-
-
-def _cache() -> Path:
-    """Where in-memory models find their meshes: an asset store in the build folder
-    (`$PRSC_BUILD_DIR/in-memory`, beside the converted robot assets)."""
-    from prsc.assets.panda import build_dir
-
-    return build_dir().parent / "in-memory"
+    return Scenario(compile_sampler(path, include_dirs=include_dirs))
 
 
 def mjcf_text(scene: dict[str, Any]) -> str:
     """The MJCF text `prsc compile --target mjcf` writes for a scene (meshes at ../assets/, as in its output)."""
-    from prsc.backends.mjcf import mjcf_xml
-    from prsc.backends.scene import parse_scene
-    from prsc.backends.store import AssetStore
+    from prsc.scenario import mjcf_text as text
 
-    root = _cache()
-    return mjcf_xml(parse_scene(scene), root / "mjcf" / "scene.xml", AssetStore(root / "assets"))
-
-
-@lru_cache(maxsize=256)
-def _file_bytes(path: str, mtime_ns: int) -> bytes:
-    return Path(path).read_bytes()
+    return text(scene)
 
 
 def mujoco_spec(scene: dict[str, Any]) -> mujoco.MjSpec:
-    """The scene's MjSpec, parsed from `mjcf_text` with its meshes given in memory.
+    """The scene's MjSpec, parsed from `mjcf_text` with its meshes given in memory (prsc.scenario)."""
+    from prsc.scenario import mujoco_spec as spec
 
-    `spec.to_xml()` equals `mujoco.MjSpec.from_file(f).to_xml()` for the file `f` that
-    `prsc compile` writes, and `spec.compile()` the model MuJoCo loads from it."""
-    import xml.etree.ElementTree as ET
-
-    import mujoco
-
-    text = mjcf_text(scene)
-    folder = _cache() / "mjcf"
-    assets = {}
-    for element in ET.fromstring(text).iter():
-        name = element.get("file")
-        if name and name not in assets:
-            path = os.path.normpath(folder / name)
-            assets[name] = _file_bytes(path, os.stat(path).st_mtime_ns)
-    return mujoco.MjSpec.from_string(text, assets=assets)
+    return spec(scene)
 
 
 def mujoco_model(scene: dict[str, Any]) -> mujoco.MjModel:
     """A `mujoco.MjModel` of a scene, built in memory: the model of the file `prsc compile` writes."""
-    return mujoco_spec(scene).compile()
+    from prsc.scenario import mujoco_model as model
+
+    return model(scene)
+
+
+def __getattr__(name: str) -> Any:
+    """`prsc.SceneEnv`, imported on first use (it needs the [gym] extra)."""
+    if name == "SceneEnv":
+        from prsc.scene_env import SceneEnv
+
+        return SceneEnv
+    raise AttributeError(f"module 'prsc' has no attribute {name!r}")

@@ -1,6 +1,7 @@
 """`prsc bench FILE... [--json]`: every sampler side by side on each spec.
 `prsc bench --backends FILE [-n 1000] [--jobs 1,2]`: files written per second per format.
 `prsc bench --episodes FILE [-n 21] [--controller TARGET]`: CPU seconds per `prsc run` episode.
+`prsc bench --resets FILE [-n 200]`: resets per CPU-second, `scenario.apply` against a compile per scene.
 
 For each spec and sampler (exact under each law: joint, sequential, rejection; hit-and-run;
 the rejection baseline): scenes per second on one core
@@ -56,6 +57,8 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--target", default=None, help="with --backends: comma-separated targets (default all)")
     parser.add_argument("--episodes", action="store_true",
                         help="time `prsc run` episodes instead: CPU s per episode and where it goes (default -n 21)")
+    parser.add_argument("--resets", action="store_true",
+                        help="time RL resets instead: scenario.apply against a model compiled per scene (default -n 200)")
     parser.add_argument("--controller", default="prsc.backends.runner.handover:handover", metavar="TARGET",
                         help="with --episodes: the controller (default the handover)")
 
@@ -176,6 +179,12 @@ def run(args: argparse.Namespace) -> int:
         compile_program(path, args.include)  # report spec errors before forking
     if args.backends:
         return _run_backends(args)
+    if args.resets:
+        from prsc.commands.bench_resets import print_resets
+
+        for path in args.files:
+            print_resets(path, args.scenes or 200, args.include)
+        return 0
     if args.episodes:
         from prsc.commands.bench_episodes import print_episodes
 

@@ -1,0 +1,70 @@
+"""`prsc bench --resets FILE [-n 200]`: resets per CPU-second, a new scene written into one
+shared MuJoCo model (`scenario.apply`) against a model compiled per scene
+(`prsc.mujoco_model`), side by side in one process on one core (docs/learning.md).
+
+Rows: drawing the scene alone; `apply` alone and a compile alone (scenes drawn
+beforehand); draw + apply (an RL reset) and draw + compile (the path without `apply`),
+from those rates; and a 4-environment
+`gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed.
+CPU time of this process, so other load on the machine does not count.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any, Callable
+
+VECTOR_ENVS = 4
+
+
+def _rate(count: int, work: Callable[[int], Any]) -> float:
+    """Calls per CPU-second of `work(k)` for k in range(count)."""
+    start = time.process_time()
+    for k in range(count):
+        work(k)
+    return count / max(time.process_time() - start, 1e-9)
+
+
+def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> dict[str, float]:
+    """Resets per CPU-second of each way (the keys of the printed table)."""
+    import mujoco
+
+    import prsc
+
+    scenario = prsc.load(spec, include_dirs)
+    model = scenario.model(seed, 0)
+    data = mujoco.MjData(model)
+    scenes = [scenario.scene(seed, k) for k in range(1, n + 1)]
+    scenario.apply(scenes[-1], model, data)  # warm-up: imports and caches are set-up, not per-reset cost
+    compiled = max(1, n // 10)  # compiling is ~100x slower: fewer of them measure it as well
+    drawn = _rate(n, lambda k: scenario.scene(seed, n + 1 + k))
+    applied = _rate(n, lambda k: scenario.apply(scenes[k], model, data))
+    compiled_rate = _rate(compiled, lambda k: prsc.mujoco_model(scenes[k]))
+    rates = {
+        "draw a scene": drawn,
+        "apply (scene drawn)": applied,
+        "compile (scene drawn)": compiled_rate,
+        # Drawing then writing: the two costs add up, as in a reset.
+        "draw + apply": 1 / (1 / drawn + 1 / applied),
+        "draw + compile": 1 / (1 / drawn + 1 / compiled_rate),
+    }
+    try:
+        import gymnasium
+    except ImportError:
+        return rates
+    envs = gymnasium.vector.SyncVectorEnv([lambda: prsc.SceneEnv(spec, include_dirs=include_dirs)] * VECTOR_ENVS)
+    envs.reset(seed=seed)
+    rates[f"SyncVectorEnv x{VECTOR_ENVS} reset"] = VECTOR_ENVS * _rate(max(1, n // VECTOR_ENVS), lambda k: envs.reset())
+    envs.close()
+    return rates
+
+
+def print_resets(spec: str, n: int, include_dirs: list[str]) -> None:
+    """Run the benchmark on one spec and print the table."""
+    rates = bench_resets(spec, n, include_dirs)
+    print(f"prsc reset benchmark: {spec}, {n} scenes, one core, load average {os.getloadavg()[0]:.2f}")
+    print(f"  apply is {rates['apply (scene drawn)'] / rates['compile (scene drawn)']:,.0f}x a compile per scene; "
+          f"a reset (draw + apply) {rates['draw + apply'] / rates['draw + compile']:,.1f}x")
+    for name, rate in rates.items():
+        print(f"  {name:<28} {rate:>9,.0f} per CPU-second")
