@@ -31,10 +31,9 @@ __all__ = ["load", "mjcf_text", "mujoco_model", "mujoco_spec", "SceneEnv"]
 
 def load(path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = ()) -> Scenario:
     """Compile a .prs spec; `.scene(seed, index)` of the result draws scene JSON, as `prsc sample` does."""
-    from prsc.sampling import compile_sampler
-    from prsc.scenario import Scenario
+    from prsc.scenario import load as load_scenario
 
-    return Scenario(compile_sampler(path, include_dirs=include_dirs))
+    return load_scenario(path, include_dirs)
 
 
 def mjcf_text(scene: dict[str, Any]) -> str:

@@ -63,6 +63,13 @@ def mujoco_model(scene: dict[str, Any]) -> mujoco.MjModel:
     return mujoco_spec(scene).compile()
 
 
+def load(path: str | os.PathLike[str], include_dirs: Iterable[str | os.PathLike[str]] = ()) -> "Scenario":
+    """Compile a .prs spec into a Scenario (`prsc.load`)."""
+    from prsc.sampling import compile_sampler
+
+    return Scenario(compile_sampler(path, include_dirs=tuple(include_dirs)))
+
+
 class Scenario:
     """A compiled spec: scenes as JSON, their MuJoCo model, and resets without recompiling."""
 

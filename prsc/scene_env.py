@@ -51,7 +51,7 @@ class SceneEnv(gymnasium.Env):
             choose_gl_backend()  # headless rendering: MuJoCo reads MUJOCO_GL when first imported
         import mujoco
 
-        import prsc
+        from prsc.scenario import load
 
         if frame_skip < 1:
             raise ValueError(f"frame_skip must be >= 1, got {frame_skip}")
@@ -59,7 +59,7 @@ class SceneEnv(gymnasium.Env):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         if observation is not None and observation_space is None:
             raise ValueError("an observation function needs its observation_space")
-        self.scenario = prsc.load(spec, include_dirs)
+        self.scenario = load(spec, include_dirs)
         self.model = self.scenario.model()
         self.data = mujoco.MjData(self.model)
         self.frame_skip = frame_skip

@@ -6,6 +6,8 @@ functions and under TYPE_CHECKING: a type named across a layer is a dependency t
 - The parser (syntax/) knows no semantics: lark, the standard library and prsc.errors.
 - Backends (and the asset recipes they read) never import spec text's stages, the IR or
   prsc.commands: they read scene JSON and asset descriptions.
+- The library API (prsc/scenario.py, prsc/scene_env.py) joins sampling and the backends;
+  commands may use it, it never uses commands.
 - No import cycles between modules. Three were broken and stay forbidden by name:
   ir/constructors <-> ir/expressions, the engine <-> Gibbs object cycle, and `commands`
   reading its own manifest through backends/settle_check.
@@ -32,7 +34,8 @@ ALLOWED = {  # layer -> the layers it may import, besides itself and FOUNDATION
     "assets": {"geometry"},
     "backends": {"geometry", "assets"},
     "library": set(),
-    "commands": {"syntax", "ir", "geometry", "constraints", "sampling", "assets", "backends"},
+    "api": {"syntax", "ir", "geometry", "constraints", "sampling", "assets", "backends"},
+    "commands": {"syntax", "ir", "geometry", "constraints", "sampling", "assets", "backends", "api"},
     "foundation": set(),
 }
 PURE_MATH = {"numpy", "highspy", "__future__"} | set(sys.stdlib_module_names)
@@ -73,9 +76,14 @@ def _graph() -> dict[str, tuple[set[str], set[str]]]:
     return graph
 
 
+API = {"prsc.scenario", "prsc.scene_env"}  # the library API (prsc.load, SceneEnv): sampling + backends
+
+
 def _layer(module: str) -> str:
     if module in FOUNDATION:
         return "foundation"
+    if module in API:
+        return "api"
     parts = module.split(".")
     return parts[1] if len(parts) > 1 and parts[1] in ALLOWED else module
 

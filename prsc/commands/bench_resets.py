@@ -30,9 +30,9 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     """Resets per CPU-second of each way (the keys of the printed table)."""
     import mujoco
 
-    import prsc
+    from prsc.scenario import load, mujoco_model
 
-    scenario = prsc.load(spec, include_dirs)
+    scenario = load(spec, include_dirs)
     model = scenario.model(seed, 0)
     data = mujoco.MjData(model)
     scenes = [scenario.scene(seed, k) for k in range(1, n + 1)]
@@ -40,7 +40,7 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     compiled = max(1, n // 10)  # compiling is ~100x slower: fewer of them measure it as well
     drawn = _rate(n, lambda k: scenario.scene(seed, n + 1 + k))
     applied = _rate(n, lambda k: scenario.apply(scenes[k], model, data))
-    compiled_rate = _rate(compiled, lambda k: prsc.mujoco_model(scenes[k]))
+    compiled_rate = _rate(compiled, lambda k: mujoco_model(scenes[k]))
     rates = {
         "draw a scene": drawn,
         "apply (scene drawn)": applied,
@@ -53,7 +53,9 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
         import gymnasium
     except ImportError:
         return rates
-    envs = gymnasium.vector.SyncVectorEnv([lambda: prsc.SceneEnv(spec, include_dirs=include_dirs)] * VECTOR_ENVS)
+    from prsc.scene_env import SceneEnv
+
+    envs = gymnasium.vector.SyncVectorEnv([lambda: SceneEnv(spec, include_dirs=include_dirs)] * VECTOR_ENVS)
     envs.reset(seed=seed)
     rates[f"SyncVectorEnv x{VECTOR_ENVS} reset"] = VECTOR_ENVS * _rate(max(1, n // VECTOR_ENVS), lambda k: envs.reset())
     envs.close()
