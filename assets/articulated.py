@@ -112,10 +112,14 @@ def robot_model(model: str | None, folders: Sequence[str] = ()) -> RobotModel | 
     return _panda() if is_robot(model) == "panda" else None
 
 
+CONVERSION_VERSION = "2"
+"""Bump when the URDF written for a file asset changes: its build folder's name carries it."""
+
+
 def _build_folder(model: RobotModel) -> Path:
     from prsc.assets.panda import build_dir
 
-    return build_dir() / model.key
+    return build_dir() / f"{model.key}-v{CONVERSION_VERSION}"
 
 
 @lru_cache(maxsize=64)

@@ -145,6 +145,7 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
         if not os.path.isfile(filename):
             raise PrscError(f"{path.name}: mesh {mesh.get('filename')!r} not found ({filename})")
         mesh.set("filename", filename)
+    _drop_invalid_inertias(root, path)
     # A root link named "world" fixed to one child is ROS's way of saying "fixed base";
     # prsc mounts the asset itself, so the child is the root in every format.
     world = [j for j in root.findall("joint") if j.find("parent") is not None and j.find("parent").get("link") == "world"]
@@ -156,9 +157,69 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
     return root
 
 
+class AssetFixWarning(UserWarning):
+    """prsc changed something in a user's asset file so that simulators load it (said once per file)."""
+
+
+def _drop_invalid_inertias(root: ET.Element, path: Path) -> None:
+    """Remove `<inertial>`s whose mass or inertia no simulator accepts (the random_urdfs'
+    izz = 0); those links get mass and inertia from their geometry (MuJoCo's
+    inertiafromgeom, density 1000 kg/m^3), and the user is told once."""
+    import numpy as np
+
+    fixed = []
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        mass = inertial.find("mass")
+        inertia = inertial.find("inertia")
+        try:
+            m = float(mass.get("value", "0")) if mass is not None else 0.0
+            i = {k: float(inertia.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")} if inertia is not None else None
+        except ValueError:
+            m, i = 0.0, None
+        if i is not None:
+            tensor = np.array([[i["ixx"], i["ixy"], i["ixz"]], [i["ixy"], i["iyy"], i["iyz"]], [i["ixz"], i["iyz"], i["izz"]]])
+            principal = np.linalg.eigvalsh(tensor)
+            valid = m > 0 and principal[0] > 0 and principal[0] + principal[1] >= principal[2] * (1 - 1e-9)
+        else:
+            valid = False
+        if not valid:
+            link.remove(inertial)
+            fixed.append(link.get("name", "?"))
+    if fixed and str(path) not in _warned_files:
+        import warnings
+
+        _warned_files.add(str(path))
+        warnings.warn(AssetFixWarning(f"{path.name}: links {', '.join(fixed)} have a mass or inertia no simulator "
+                                      "accepts; prsc computes theirs from their geometry (1000 kg/m^3)"), stacklevel=2)
+
+
+_warned_files: set[str] = set()
+
+
 def urdf_with_absolute_paths(path: Path, folders: Sequence[str] = ()) -> str:
-    """The URDF's text with every mesh path absolute, for any URDF reader."""
-    return '<?xml version="1.0"?>\n' + ET.tostring(_urdf_tree(path, folders), encoding="unicode") + "\n"
+    """The URDF's text with every mesh path absolute, for any URDF reader; a link whose
+    inertial was dropped gets the one MuJoCo computes from its geometry, so every format
+    carries the same masses."""
+    root = _urdf_tree(path, folders)
+    missing = [link for link in root.findall("link") if link.find("inertial") is None]
+    if missing:
+        model = asset_spec(path, folders).compile()
+        for link in missing:
+            body = model.body(link.get("name")).id
+            inertial = ET.SubElement(link, "inertial")
+            w, x, y, z = (float(v) for v in model.body_iquat[body])
+            roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+            pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+            yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+            ET.SubElement(inertial, "origin", xyz=" ".join(repr(float(v)) for v in model.body_ipos[body]),
+                          rpy=f"{roll!r} {pitch!r} {yaw!r}")
+            ET.SubElement(inertial, "mass", value=repr(float(model.body_mass[body])))
+            ixx, iyy, izz = (repr(float(v)) for v in model.body_inertia[body])
+            ET.SubElement(inertial, "inertia", ixx=ixx, ixy="0", ixz="0", iyy=iyy, iyz="0", izz=izz)
+    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
 
 
 def _urdf_text(path: Path, folders: Sequence[str]) -> str:
@@ -253,8 +314,13 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
     points = []
     for g in geoms:
-        centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
-        local = centre + corners * half
+        if model.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_MESH):
+            # The mesh's own vertices (in the geom frame): exact, where a box about them is not.
+            mesh = model.geom_dataid[g]
+            local = model.mesh_vert[model.mesh_vertadr[mesh]:model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+        else:
+            centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+            local = centre + corners * half
         world = data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T
         points.append(world - root_pos)
     points = np.concatenate(points)

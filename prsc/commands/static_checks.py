@@ -34,8 +34,19 @@ def check_file_names(program: Any) -> None:
 
 def compile_checked(path: str, include_dirs: Sequence[str] = (), **opts: Any) -> Sampler:
     """The spec compiled as far as compile goes before sampling, with every error found there (opts: compile_sampler's)."""
+    import sys
+    import warnings
+
+    from prsc.asset_files import AssetFixWarning
     from prsc.sampling import compile_sampler
 
-    sampler = compile_sampler(path, include_dirs=include_dirs, **opts)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", AssetFixWarning)
+        sampler = compile_sampler(path, include_dirs=include_dirs, **opts)
+    for warning in caught:  # what prsc changed in a user's asset file, said as compile says warnings
+        if issubclass(warning.category, AssetFixWarning):
+            sys.stderr.write(f"prsc: warning: {warning.message}\n")
+        else:
+            warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
     check_file_names(sampler.program)
     return sampler

@@ -26,7 +26,7 @@ from tests.backends import readback
 
 pybullet_data = pytest.importorskip("pybullet_data")
 DATA = Path(pybullet_data.getDataPath())
-SCENES = 4
+SCENES = 2
 REACH_SCENES = 20
 
 MJCF_ARM = """\
