@@ -216,16 +216,20 @@ def run(args: argparse.Namespace) -> int:
     if len(todo) < len(tasks):
         console.print(f"resuming: {len(tasks) - len(todo)} of {len(tasks)} episodes already in {out / RESULTS}")
 
-    from rich.progress import Progress
+    from contextlib import nullcontext
+
+    from prsc.commands.progress import progress_bar
 
     appender = _Appender(out / RESULTS, records)
+    progress = progress_bar(len(todo), "episodes", "episodes")
     try:
-        with Progress(console=console, transient=True) as progress:
-            bar = progress.add_task("episodes", total=len(todo))
+        with progress if progress else nullcontext():
+            bar = progress.add_task("episodes", total=len(todo)) if progress else None
 
             def finished(answer: tuple[str, Any]) -> None:
                 appender(answer)
-                progress.advance(bar)
+                if progress:
+                    progress.advance(bar)
 
             cpu_before = cpu_seconds()
             executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"),

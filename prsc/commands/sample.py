@@ -39,17 +39,26 @@ def add_parser(subparsers: Any) -> None:
 
 def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> Any:
     """Write n scenes as JSON lines; returns the merged rejection statistics."""
+    from contextlib import nullcontext
+
+    from prsc.commands.progress import progress_bar
     from prsc.sampling.stats import RejectionStats
 
     total = RejectionStats()
     dumps = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
-    for index in range(start, start + n):
-        result = sampler.sample(seed, index)
-        total.merge(result.stats)
-        scene = sampler.to_json(result, seed, index)
-        out.write(dumps(scene))
-        out.write("\n")
+    bar = progress_bar(n if n >= 100 else 0, "sampling")  # short runs need none
+    task = bar.add_task("sample", total=n) if bar else None
+    with bar if bar else nullcontext():
+        for index in range(start, start + n):
+            result = sampler.sample(seed, index)
+            total.merge(result.stats)
+            scene = sampler.to_json(result, seed, index)
+            out.write(dumps(scene))
+            out.write("\n")
+            if bar:
+                bar.advance(task)
     return total
+
 
 
 def run(args: argparse.Namespace) -> int:
