@@ -121,7 +121,7 @@ class SharedModel:
             self._apply_whole(scene_json)
         poses = np.array([scene_position(raw.get("position"), f"scene JSON: object {body.name!r}.position")
                           + unit_quaternion(raw.get("quaternion"), f"scene JSON: object {body.name!r}.quaternion")
-                          for body, raw in zip(self._bodies, scene_json["objects"])])
+                          for body, raw in zip(self._bodies, scene_json["objects"])], dtype=float).reshape(-1, 7)
         model.body_pos[self._body_ids] = poses[:, :3]
         model.body_quat[self._body_ids] = poses[:, 3:]
         free = poses[self._free]

@@ -1,4 +1,4 @@
-"""20 scenes of every spec, compiled once to every format (one fixture per spec, shared):
+"""10 scenes of every spec, compiled once to every format (one fixture per spec, shared):
 
 - MJCF loads, settles without jumps, and keeps the poses;
 - USD validates with zero errors and keeps the poses;
