@@ -112,7 +112,7 @@ def robot_model(model: str | None, folders: Sequence[str] = ()) -> RobotModel | 
     return _panda() if is_robot(model) == "panda" else None
 
 
-CONVERSION_VERSION = "2"
+CONVERSION_VERSION = "3"
 """Bump when the URDF written for a file asset changes: its build folder's name carries it."""
 
 

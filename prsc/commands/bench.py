@@ -246,5 +246,5 @@ def _run_backends(args: argparse.Namespace) -> int:
     if unknown or not targets:
         raise PrscError(f"unknown target {', '.join(unknown) or '(none)'}; choose from {', '.join(TARGETS)}")
     for path in args.files:
-        print_backends(path, args.scenes or 1000, jobs, targets)
+        print_backends(path, args.scenes or 1000, jobs, targets, args.include)
     return 0
