@@ -21,8 +21,16 @@ from prsc.errors import PrscError
 from prsc.files import atomic_write
 
 GRAVITY_COMPENSATION_DAMPING = 2.0
-"""Joint damping (N m s/rad) given to an arm without actuators, which holds its pose by
-gravity compensation alone: it damps what contacts start."""
+"""Joint damping (N m s/rad or N s/m) given to an asset without actuators of its own."""
+
+SERVO_FREQUENCY = 30.0
+"""Natural frequency (rad/s) of the position servo prsc gives each joint of an asset without
+actuators (a URDF has none): stiffness = inertia x frequency^2, critically damped, so a
+heavy shoulder and a light wrist both settle (one gain for all makes the wrist unstable at
+MuJoCo's 2 ms step). With gravity compensated, the servos only move the links."""
+
+SERVO_ARMATURE = 0.01
+"""Rotor inertia (kg m^2) added to each such joint: keeps a near-massless wrist stable."""
 
 
 @dataclass(frozen=True)
@@ -60,12 +68,31 @@ class RobotModel:
         spec = asset_spec(self.source, self.folders)
         for key in list(spec.keys):  # keyframes belong to the scene, which writes its own `home`
             spec.delete(key)
+        # MuJoCo does not filter contacts between a child and a parent welded to the world
+        # (a fixed base is): a link touching its base would jam its joint. Exclude them.
+        for body in spec.bodies[1:]:
+            parent = body.parent
+            if parent is not None and parent.name and parent.name != "world":
+                spec.add_exclude(bodyname1=parent.name, bodyname2=body.name)
         if not self.actuated:
-            # No actuators to hold the pose: compensate gravity on every link and damp the joints.
+            # No actuators of its own (a URDF): compensate gravity on every link, damp the
+            # joints, and give each joint a position servo named after it, force-limited to
+            # the file's effort where it states one, so that controllers can drive it.
+            import mujoco
+
             for body in spec.bodies[1:]:
                 body.gravcomp = 1.0
             for joint in spec.joints:
                 joint.damping = [GRAVITY_COMPENSATION_DAMPING, 0.0, 0.0]
+                joint.armature = SERVO_ARMATURE
+            inertia = spec.compile().dof_M0  # each joint's inertia at the reference pose
+            for joint, moment in zip(spec.joints, inertia):
+                servo = spec.add_actuator(name=joint.name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+                servo.set_to_position(kp=float(moment) * SERVO_FREQUENCY ** 2, kv=2 * float(moment) * SERVO_FREQUENCY)
+                effort = joint.actfrcrange
+                if effort[1] > effort[0]:
+                    servo.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+                    servo.forcerange = list(effort)
         return spec
 
     @property

@@ -24,10 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
+from prsc.arm_ik import ArmFrames, reach_top_down
 from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 
-RECIPE_VERSION = "1"
+RECIPE_VERSION = "2"  # the IK (prsc/arm_ik.py) and the construction below
 APPROACH = 0.12  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 12  # rays over the half ahead: every 15 degrees from -90 to +90
@@ -35,8 +36,6 @@ RADII = tuple(round(0.05 + 0.05 * i, 3) for i in range(30))  # the coarse scan, 
 REFINE = 4  # bisections of the outer end (5 cm / 2^4 ~ 3 mm)
 MARGIN = 0.01  # m taken off the outer radii
 INNER_MARGIN = 0.03  # m added to the inner radius
-POSITION_TOLERANCE = 0.002  # m
-ANGLE_TOLERANCE = 0.02  # rad
 
 
 @dataclass(frozen=True)
@@ -49,73 +48,21 @@ class ReachCell:
 
 
 class TopDownIK:
-    """Damped least-squares IK of an arm's tool to a position with its +z pointing down."""
+    """The arm alone (its file's model), asked whether its tool reaches points top-down (root frame)."""
 
     def __init__(self, asset: ArticulatedAsset) -> None:
         import mujoco
 
-        spec = asset_spec(asset.source)
-        self.model = spec.compile()
+        self.model = asset_spec(asset.source).compile()
         self.data = mujoco.MjData(self.model)
-        self.site = asset.tcp if asset.tcp in asset.sites else None
-        self.body = None if self.site else self.model.body(asset.tcp).id
-        if self.site:
-            self.site = self.model.site(self.site).id
-        self.lower = np.where(self.model.jnt_limited, self.model.jnt_range[:, 0], -np.inf)
-        self.upper = np.where(self.model.jnt_limited, self.model.jnt_range[:, 1], np.inf)
+        self.arm = ArmFrames.of(self.model, [j.name for j in asset.joints], str(asset.tcp))
         self.home = np.array([j.home for j in asset.joints])
-        root = self.model.body(asset.root).id
         mujoco.mj_kinematics(self.model, self.data)
-        self.root = self.data.xpos[root].copy()
-
-    def _tool(self):
-        if self.site is not None:
-            return self.data.site_xpos[self.site], self.data.site_xmat[self.site].reshape(3, 3)
-        return self.data.xpos[self.body], self.data.xmat[self.body].reshape(3, 3)
-
-    def solve(self, target: np.ndarray, q: np.ndarray, iterations: int = 80) -> tuple[np.ndarray, bool]:
-        """(joint values, reached) for the tool at `target` (root frame) pointing down, from `q`."""
-        import mujoco
-
-        model, data = self.model, self.data
-        goal = np.asarray(target, float) + self.root
-        jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
-        down = np.array([0.0, 0.0, -1.0])
-        q = np.clip(np.array(q, float), self.lower, self.upper)
-        for _ in range(iterations):
-            data.qpos[:] = q
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_comPos(model, data)
-            position, rotation = self._tool()
-            error_p = goal - position
-            axis = rotation[:, 2]
-            error_r = np.cross(axis, down)
-            if np.linalg.norm(error_p) < POSITION_TOLERANCE and math.acos(min(1.0, -axis[2])) < ANGLE_TOLERANCE:
-                return q, True
-            if self.site is not None:
-                mujoco.mj_jacSite(model, data, jacp, jacr, self.site)
-            else:
-                mujoco.mj_jacBody(model, data, jacp, jacr, self.body)
-            # Turning about the vertical leaves a top-down grasp top-down: drop it from the task.
-            horizontal = np.eye(3) - np.outer(down, down)
-            jac = np.vstack([jacp, horizontal @ jacr])
-            error = np.concatenate([error_p, horizontal @ error_r])
-            step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), error)
-            q = np.clip(q + step, self.lower, self.upper)
-        return q, False
+        self.root = self.data.xpos[self.model.body(asset.root).id].copy()
 
     def reaches(self, point: np.ndarray, seed: np.ndarray) -> tuple[np.ndarray, bool]:
-        """Whether the tool reaches the point and the approach above it, top-down."""
-        above = point + np.array([0.0, 0.0, APPROACH])
-        # Straight-up homes are singular for a top-down pose: bent starts get past that.
-        bend = np.where(np.arange(len(self.home)) % 2, 0.5, -0.5)
-        for start in (seed, self.home, self.home + bend, self.home - bend):
-            q, ok = self.solve(above, start)
-            if ok:
-                q, ok = self.solve(point, q)
-                if ok:
-                    return q, True
-        return seed, False
+        """Whether the tool reaches the point (root frame) and the approach above it, top-down."""
+        return reach_top_down(self.model, self.data, self.arm, point + self.root, seed, self.home, APPROACH)
 
 
 def _ray_point(angle: float, radius: float, height: float) -> np.ndarray:

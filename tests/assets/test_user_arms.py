@@ -261,3 +261,17 @@ def test_the_example_spec_compiles_as_its_docstring_says(tmp_path):
     assert done.returncode == 0, done.stderr
     scene = json.loads((tmp_path / "xarm_cubes" / "json" / "00001.json").read_text())
     assert len(_arm(scene)["joints"]) == 6
+
+
+def test_the_example_controller_drives_every_arm_by_its_own_names(arm_output, tmp_path):
+    """`prsc run --controller prsc.backends.runner.visit:visit` (no Panda constants): the
+    tool visits a point above each reachable cube, under the arm's own servos (a URDF arm's
+    from prsc), in every episode."""
+    name, _, root, _ = arm_output
+    spec = root.parent.parent / "arm.prs"
+    done = _prsc("run", str(spec), "-I", str(DATA), "--controller", "prsc.backends.runner.visit:visit", "-n", "3",
+                 "-o", str(tmp_path / "run"))
+    assert done.returncode == 0, done.stderr
+    records = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
+    assert [r["outcome"] for r in records] == ["visited"] * 3, records
+    assert max(r["worst"] for r in records) < 0.01

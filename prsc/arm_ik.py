@@ -1,0 +1,99 @@
+"""Top-down IK for any arm in any MuJoCo model (docs/assets.md): damped least squares on
+the arm's joints that puts its tool frame at a point with the tool's +z straight down, any
+yaw. The reach cell of `reachable by` (prsc/constraints/arm_reach.py) is built with it on
+the arm alone, and the example controller for any arm (prsc/backends/runner/visit.py) runs
+it on the compiled scene. Foundation module: mujoco is imported by the caller's model.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+POSITION_TOLERANCE = 0.002  # m
+ANGLE_TOLERANCE = 0.02  # rad
+DOWN = np.array([0.0, 0.0, -1.0])
+LIMIT_MARGIN = 0.02  # rad or m kept from every joint limit: a simulated servo held against its
+# limit stops short of it (the limit constraint is soft), so a pose at a limit would miss.
+
+
+@dataclass(frozen=True)
+class ArmFrames:
+    """Where an arm lives in a model: its joints' qpos and dof addresses and its tool."""
+
+    qpos: np.ndarray  # qpos address of each arm joint (hinge or slide), in order
+    dofs: np.ndarray  # dof address of each
+    lower: np.ndarray  # joint limits less LIMIT_MARGIN (-inf/inf when unlimited)
+    upper: np.ndarray
+    tool: int  # site id or body id
+    tool_is_site: bool
+
+    @staticmethod
+    def of(model, joints: list[str], tool: str) -> "ArmFrames":
+        """The frames of joints `joints` and tool `tool` (a site, else a body) of `model`."""
+        ids = [model.joint(name).id for name in joints]
+        limited = model.jnt_limited[ids].astype(bool)
+        try:
+            tool_id, is_site = model.site(tool).id, True
+        except KeyError:
+            tool_id, is_site = model.body(tool).id, False
+        return ArmFrames(
+            qpos=model.jnt_qposadr[ids].copy(), dofs=model.jnt_dofadr[ids].copy(),
+            lower=np.where(limited, model.jnt_range[ids, 0] + LIMIT_MARGIN, -np.inf),
+            upper=np.where(limited, model.jnt_range[ids, 1] - LIMIT_MARGIN, np.inf),
+            tool=tool_id, tool_is_site=is_site,
+        )
+
+    def tool_pose(self, data) -> tuple[np.ndarray, np.ndarray]:
+        """The tool's world position and rotation matrix in `data` (after kinematics)."""
+        if self.tool_is_site:
+            return data.site_xpos[self.tool].copy(), data.site_xmat[self.tool].reshape(3, 3).copy()
+        return data.xpos[self.tool].copy(), data.xmat[self.tool].reshape(3, 3).copy()
+
+
+def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
+                   iterations: int = 80) -> tuple[np.ndarray, bool]:
+    """(arm joint values, reached) for the tool at world point `goal` pointing down, from `q`.
+
+    Writes `data.qpos` of the arm's joints as it goes (other joints stay); call it on a
+    scratch MjData."""
+    import mujoco
+
+    jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+    horizontal = np.eye(3) - np.outer(DOWN, DOWN)  # turning about the vertical keeps a top-down pose
+    q = np.clip(np.array(q, float), arm.lower, arm.upper)
+    for _ in range(iterations):
+        data.qpos[arm.qpos] = q
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        position, rotation = arm.tool_pose(data)
+        error_p = goal - position
+        axis = rotation[:, 2]
+        if np.linalg.norm(error_p) < POSITION_TOLERANCE and math.acos(min(1.0, -axis[2])) < ANGLE_TOLERANCE:
+            return q, True
+        if arm.tool_is_site:
+            mujoco.mj_jacSite(model, data, jacp, jacr, arm.tool)
+        else:
+            mujoco.mj_jacBody(model, data, jacp, jacr, arm.tool)
+        jac = np.vstack([jacp[:, arm.dofs], horizontal @ jacr[:, arm.dofs]])
+        error = np.concatenate([error_p, horizontal @ np.cross(axis, DOWN)])
+        step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), error)
+        q = np.clip(q + step, arm.lower, arm.upper)
+    return q, False
+
+
+def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarray, home: np.ndarray,
+                   approach: float) -> tuple[np.ndarray, bool]:
+    """The point `approach` above `goal`, then `goal` itself, each top-down; from `seed`,
+    else from home and two bent starts (a straight-up home is singular for a top-down pose)."""
+    above = goal + np.array([0.0, 0.0, approach])
+    bend = np.where(np.arange(len(home)) % 2, 0.5, -0.5)
+    for start in (seed, home, home + bend, home - bend):
+        q, ok = solve_top_down(model, data, arm, above, start)
+        if ok:
+            q, ok = solve_top_down(model, data, arm, goal, q)
+            if ok:
+                return q, True
+    return seed, False
