@@ -11,7 +11,6 @@ stepping (`mj_step`) and rendering.
 
 from __future__ import annotations
 
-import json
 import os
 import tempfile
 import time
@@ -44,33 +43,36 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
     """Run n episodes (the first as warm-up); CPU totals of the others."""
     from prsc.backends.runner.gl import choose_gl_backend
 
-    choose_gl_backend()
+    gl_backend = choose_gl_backend()
     import mujoco
 
     from prsc.backends.runner import harness, rendering
     from prsc.backends.runner.controller import parse_target
-    from prsc.backends.runner.tasks import EpisodeTask
-    from prsc.commands.output_folder import compiled_scenes
+    from prsc.backends.runner.tasks import DEFAULT_MAX_SIM_SECONDS
+    from prsc.backends.runner.worker import WorkerConfig
+    from prsc.commands.campaign import episode_tasks, run_episodes
     from prsc.commands.compile import compile_scenes
+    from prsc.commands.executors import make_executor
 
+    # One worker in this process (a local executor of one job runs inline), as `prsc run`'s workers run them.
+    executor, config = make_executor("local", 1), WorkerConfig(gl_backend)
     with tempfile.TemporaryDirectory(prefix="prsc-run-bench-") as tmp:
         root = compile_scenes(spec, ["json", "mjcf"], n, 0, tmp, include_dirs=include_dirs)
-        ref = parse_target(controller)
-        tasks = [EpisodeTask(index, json.loads(scene.read_text()), str(mjcf), 0, ref)
-                 for index, scene, mjcf in compiled_scenes(root)]
-        harness.run_episode(tasks[0])
+        tasks, _ = episode_tasks(root, None, 0, parse_target(controller), DEFAULT_MAX_SIM_SECONDS)
+        run_episodes(executor, config, tasks[:1], lambda record: None)
+        records: list[dict] = []
         totals: Counter = Counter()
         with _timed(harness, "load_model", totals, "load"), _timed(mujoco, "mj_step", totals, "step"), \
                 _timed(rendering.OffscreenRenderer, "rgb", totals, "render"), \
                 _timed(rendering.OffscreenRenderer, "depth", totals, "render"), \
                 _timed(rendering, "_render_context", totals, "render"):
             cpu, wall = time.process_time(), time.perf_counter()
-            results = [harness.run_episode(task) for task in tasks[1:]]
+            run_episodes(executor, config, tasks[1:], records.append)
             totals["cpu"] = time.process_time() - cpu
             totals["wall"] = time.perf_counter() - wall
-    totals["episodes"] = len(results)
-    totals["sim"] = sum(r.sim_seconds for r in results)
-    return {"totals": totals, "outcomes": Counter(r.outcome for r in results)}
+    totals["episodes"] = len(records)
+    totals["sim"] = sum(r["sim_seconds"] for r in records)
+    return {"totals": totals, "outcomes": Counter(r["outcome"] for r in records)}
 
 
 def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) -> None:

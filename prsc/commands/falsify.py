@@ -31,7 +31,6 @@ from prsc.errors import PrscError
 
 METHODS = ("failure-tree", "cross-entropy", "uniform")
 STRATA_STREAM = 0x5354  # entropy word that keeps a round's offset apart from scene_rng(seed, index)
-MARKER = "falsify.json"  # what this folder's campaign was: its results.jsonl is prsc falsify's own
 
 
 def add_parser(subparsers: Any) -> None:
@@ -103,22 +102,6 @@ def next_proposal(method: str, proposal: Any, masses: dict, records: list[dict])
     return (cross_entropy_step if method == "cross-entropy" else failure_tree_step)(proposal, masses, episodes)
 
 
-def finished_records(out: Path, campaign: dict) -> list[dict]:
-    """The episodes of the finished rounds of the same campaign in `out` (--resume); an error for another one."""
-    try:
-        marker = json.loads((out / MARKER).read_text(encoding="utf-8"))
-        lines = (out / "results.jsonl").read_text(encoding="utf-8").splitlines()
-    except (OSError, ValueError):
-        raise PrscError(f"--resume: {out} holds no prsc falsify campaign to continue") from None
-    if marker != campaign:
-        raise PrscError(f"--resume: {out} holds another campaign ({marker}); "
-                        "resume it with the same spec, --seed, --method, --budget and --rounds")
-    records = [json.loads(line) for line in lines if line.strip()]
-    if [r.get("index") for r in records] != list(range(len(records))):
-        raise PrscError(f"--resume: {out / 'results.jsonl'} is not a campaign's episodes in order")
-    return records
-
-
 def run(args: argparse.Namespace) -> int:
     """Run the rounds, then write the summary, clusters, plots and the proposal."""
     if args.budget < 1:
@@ -133,9 +116,8 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
 
     from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
-    from prsc.backends.runner.tasks import EpisodeTask
-    from prsc.backends.runner.worker import WorkerConfig, run_task
-    from prsc.commands.output_folder import compiled_scenes
+    from prsc.backends.runner.worker import WorkerConfig
+    from prsc.commands.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
     from prsc.commands.compile import compile_scenes
     from prsc.commands.executors import make_executor, worker_count
     from prsc.commands.falsify_report import write_report
@@ -152,61 +134,60 @@ def run(args: argparse.Namespace) -> int:
     jobs = worker_count(args.jobs)
     executor = make_executor(args.executor, jobs, args.address, start="spawn")
     out = args.output or Path("out") / f"falsify-{source.stem}"
-    if (out / "results.jsonl").exists() and not (out / MARKER).exists() and not args.force:
-        raise PrscError(f"{out} holds a results.jsonl that prsc falsify did not write; "
-                        "choose another output folder, or pass --force to replace it")
-    campaign = {"spec": str(source), "seed": args.seed, "method": args.method, "budget": args.budget, "rounds": args.rounds}
-    finished = finished_records(out, campaign) if args.resume else []
+    refuse_foreign_results(out, "falsify", args.force)
+    results = Results(out, {"command": "falsify", "spec": str(source), "seed": args.seed, "method": args.method,
+                            "budget": args.budget, "rounds": args.rounds, "controller": args.controller,
+                            "controller_sha256": controller_ref.digest, "max_sim_seconds": args.max_sim_seconds})
+    kept: dict[int, dict] = {}
+    if args.resume:
+        if results.stored_key() is None:
+            raise PrscError(f"--resume: {out} holds no prsc falsify campaign to continue")
+        if results.stored_key() != results.key:
+            raise PrscError(f"--resume: {out} holds another campaign ({results.stored_key()}); resume it with the "
+                            "same spec, --seed, --method, --budget, --rounds, --controller and --max-sim-seconds")
+        kept = results.recorded()
     (out / "scenes").mkdir(parents=True, exist_ok=True)
-    atomic_write(out / MARKER, json.dumps(campaign) + "\n")
+    results.begin(kept)
     console = Console(stderr=True)
     proposal = Proposal()
     # An empty proposal draws exactly as the spec's (sequential) law does, recording where each
     # draw fell (for the clusters). Later rounds swap the proposal into the same compiled sampler.
     sampler = compile_sampler(str(source), args.include, law="sequential", proposal=proposal)
-    records: list[dict] = []
+    config = WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray")
     masses: dict = {}
     start = 0
-    for number, size in enumerate(round_sizes(args.budget, args.rounds)):
-        if number and args.method != "uniform":
-            sampler.set_proposal(replace(proposal, strata=round_strata(args.seed, number, start, size)))
-        scenes, info, seen = draw_round(sampler, args.seed, start, size)
-        masses.update(seen)
-        if start + size <= len(finished):  # a finished round of the killed campaign: its draws rebuild the proposal
-            records += finished[start:start + size]
-            console.print(f"round {number}: {size} episodes kept from {out / 'results.jsonl'}")
+    try:
+        for number, size in enumerate(round_sizes(args.budget, args.rounds)):
+            if number and args.method != "uniform":
+                sampler.set_proposal(replace(proposal, strata=round_strata(args.seed, number, start, size)))
+            scenes, info, seen = draw_round(sampler, args.seed, start, size)
+            masses.update(seen)
+            indices = range(start, start + size)
+            if all(k in results.records for k in indices):  # a finished round of the killed campaign
+                console.print(f"round {number}: {size} episodes kept from {out / RESULTS}")
+            else:
+                check = getattr(controller, "check", None)
+                if check is not None:
+                    for scene in scenes:
+                        check(scene)
+                listing = out / "scenes" / f"round_{number:02d}.jsonl"
+                atomic_write(listing, "".join(json.dumps(s, separators=(",", ":")) + "\n" for s in scenes))
+                root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs=jobs,
+                                      include_dirs=args.include,
+                                      executor=make_executor(args.executor, jobs, args.address, start="fork"),
+                                      force=args.force, assets_dir=str(out / "assets"))
+                tasks, _ = episode_tasks(root, None, args.seed, controller_ref, args.max_sim_seconds, first=start)
+                extra = {start + k: {"round": number, "weight": e["weight"], "law": proposal.law, "features": e["features"],
+                                     "collision_rejections": e["collision_rejections"]} for k, e in enumerate(info)}
+                run_episodes(executor, config, [t for t in tasks if t.index not in results.records], results.add,
+                             extras=extra.__getitem__)
+                failed = sum(results.records[k]["outcome"] != "success" for k in indices)
+                console.print(f"round {number}: {size} episodes, {failed} failed")
             start += size
-            proposal = next_proposal(args.method, proposal, masses, records)
-            continue
-        check = getattr(controller, "check", None)
-        if check is not None:
-            for scene in scenes:
-                check(scene)
-        listing = out / "scenes" / f"round_{number:02d}.jsonl"
-        atomic_write(listing, "".join(json.dumps(s, separators=(",", ":")) + "\n" for s in scenes))
-        root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs=jobs,
-                              include_dirs=args.include,
-                              executor=make_executor(args.executor, jobs, args.address, start="fork"),
-                              force=args.force, assets_dir=str(out / "assets"))
-        mjcf = {index: xml for index, _, xml in compiled_scenes(root)}
-        tasks = [EpisodeTask(start + k, scene, str(mjcf[k]), args.seed, controller_ref, args.max_sim_seconds)
-                 for k, scene in enumerate(scenes)]
-        answers = executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"), tasks)
-        for task, (status, value), extra in zip(tasks, answers, info):
-            if status == "fault":
-                from prsc.backends.runner.faults import InfrastructureError
-
-                raise InfrastructureError(value)
-            record = value.to_json()
-            record.update({"round": number, "weight": extra["weight"], "law": proposal.law,
-                           "features": extra["features"], "collision_rejections": extra["collision_rejections"]})
-            records.append(record)
-        failed = sum(r["outcome"] != "success" for r in records[start:])
-        console.print(f"round {number}: {size} episodes, {failed} failed")
-        # Each round's records at once (whole file, atomically): a kill loses at most a round.
-        atomic_write(out / "results.jsonl", "".join(json.dumps(r, separators=(", ", ": ")) + "\n" for r in records))
-        start += size
-        proposal = next_proposal(args.method, proposal, masses, records)
+            proposal = next_proposal(args.method, proposal, masses, [results.records[k] for k in range(start)])
+    finally:
+        results.close()
+    records = results.finish()
     atomic_write(out / "proposal.json", json.dumps(proposal.to_json(), indent=1) + "\n")
     table = write_report(records, proposal, masses, out, f"{source.name}: falsify ({args.method}), "
                          f"budget {args.budget}, seed {args.seed}", declared)

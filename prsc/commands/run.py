@@ -17,15 +17,15 @@ import argparse
 import json
 import sys
 import time
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
+from prsc.commands.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
 from prsc.commands.executors import add_executor_arguments, cpu_seconds
 from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, read_proposal
 from prsc.errors import PrscError
 
-RESULTS = "results.jsonl"
-CAMPAIGN = "campaign.json"
 STRIPS = "strips.json"  # in failures/: the strips prsc wrote there, the only ones it replaces
 
 
@@ -69,14 +69,6 @@ def _scenes_to_check(source: Path, count: int | None, seed: int, compiled: Any) 
     return [compiled.scene(seed=seed, index=0)]
 
 
-def _compiled(root: Path, count: int | None) -> list[tuple[dict, Path]]:
-    """(scene, MJCF path) of every compiled scene of the folder's manifest, in index order."""
-    from prsc.commands.output_folder import compiled_scenes
-
-    return [(json.loads(scene.read_text(encoding="utf-8")), mjcf)
-            for _, scene, mjcf in compiled_scenes(root, range(count) if count else None)]
-
-
 def _campaign_key(manifest: dict, args: argparse.Namespace, controller_digest: str) -> dict:
     """What makes two runs the same campaign: the compiled scenes, the controller and its limit."""
     from importlib.metadata import PackageNotFoundError, version
@@ -85,61 +77,10 @@ def _campaign_key(manifest: dict, args: argparse.Namespace, controller_digest: s
         prsc_version = version("prsc")
     except PackageNotFoundError:
         prsc_version = "unknown"
-    return {"prsc": prsc_version, "spec_sha256": manifest["spec_sha256"], "sources_sha256": manifest["sources_sha256"],
+    return {"command": "run", "prsc": prsc_version, "spec_sha256": manifest["spec_sha256"],
+            "sources_sha256": manifest["sources_sha256"],
             "seed": args.seed, "controller": args.controller, "controller_sha256": controller_digest,
             "max_sim_seconds": args.max_sim_seconds}
-
-
-def _recorded(out: Path, campaign: dict) -> dict[int, dict]:
-    """Episodes already in OUT/results.jsonl from the same campaign, by index (a torn last line is dropped)."""
-    results, marker = out / RESULTS, out / CAMPAIGN
-    try:
-        same = json.loads(marker.read_text(encoding="utf-8")) == campaign
-    except (OSError, ValueError):
-        same = False
-    if not same or not results.is_file():
-        return {}
-    done: dict[int, dict] = {}
-    for line in results.read_text(encoding="utf-8", errors="replace").splitlines():
-        try:
-            record = json.loads(line)
-            done[int(record["index"])] = record
-        except (ValueError, KeyError, TypeError):
-            continue  # the line a kill cut short
-    return done
-
-
-def _line(record: dict) -> str:
-    return json.dumps(record, separators=(", ", ": "))
-
-
-class _Appender:
-    """Appends each finished episode to results.jsonl at once (flushed), so a kill loses none."""
-
-    def __init__(self, path: Path, records: dict[int, dict]):
-        self.path = path
-        self.records = records
-        self.fault: str | None = None
-        self._file = open(path, "a", encoding="utf-8")
-
-    def __call__(self, answer: tuple[str, Any]) -> None:
-        status, value = answer
-        if status == "fault":
-            from prsc.backends.runner.faults import InfrastructureError
-
-            raise InfrastructureError(value)
-        record = value.to_json()
-        self.records[record["index"]] = record
-        try:
-            self._file.write(_line(record) + "\n")
-            self._file.flush()
-        except OSError as error:
-            from prsc.commands.outputs import write_error
-
-            raise write_error(error, self.path) from None
-
-    def close(self) -> None:
-        self._file.close()
 
 
 def _validate(args: argparse.Namespace) -> None:
@@ -164,14 +105,13 @@ def run(args: argparse.Namespace) -> int:
     gl_backend = choose_gl_backend()
     from rich.console import Console
 
-    from prsc.files import atomic_write
     from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
-    from prsc.backends.runner.tasks import EpisodeTask
-    from prsc.backends.runner.worker import WorkerConfig, run_task
-    from prsc.commands.compile import compile_scenes
+    from prsc.backends.runner.worker import WorkerConfig
+    from prsc.commands.compile import MANIFEST, compile_scenes
+    from prsc.commands.executors import make_executor, worker_count
+    from prsc.commands.progress import progress_bar
     from prsc.commands.scene_sources import proposal_from_json
     from prsc.commands.static_checks import compile_checked
-    from prsc.commands.executors import make_executor, worker_count
 
     source = Path(args.file)
     proposal = read_proposal(args.proposal, args.file)
@@ -190,56 +130,44 @@ def run(args: argparse.Namespace) -> int:
             check(scene)  # before anything is written
     console = Console(stderr=True)
     out = args.output or Path("out") / f"run-{source.stem}"
+    refuse_foreign_results(out, "run", args.force)
     started = time.perf_counter()
     # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
     count = args.n if args.n is not None else (0 if is_json else 10)
     root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs=jobs, include_dirs=args.include,
                           executor=make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
                           proposal=proposal, law=args.law, compiled=compiled)
-    from prsc.commands.compile import MANIFEST
-
     manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
-    pairs = _compiled(root, count)
+    tasks, scenes = episode_tasks(root, range(count) if count else None, args.seed, controller_ref, args.max_sim_seconds)
     if check is not None and not is_json:  # a JSON input's scenes, and scene 0 of a spec, were checked above
-        for scene, _ in pairs[1:]:
+        for scene in scenes[1:]:
             check(scene)
-    tasks = [EpisodeTask(k, scene, str(mjcf), int(scene.get("seed", args.seed)), controller_ref, args.max_sim_seconds)
-             for k, (scene, mjcf) in enumerate(pairs)]
     compiled = time.perf_counter()
 
-    campaign = _campaign_key(manifest, args, controller_ref.digest)
-    records = {k: r for k, r in _recorded(out, campaign).items() if k < len(tasks)}
-    todo = [t for t in tasks if t.index not in records]
-    atomic_write(out / CAMPAIGN, json.dumps(campaign, indent=1) + "\n")
-    # Start the file from the recorded episodes of this campaign only (in index order).
-    atomic_write(out / RESULTS, "".join(_line(records[k]) + "\n" for k in sorted(records)))
-    if len(todo) < len(tasks):
-        console.print(f"resuming: {len(tasks) - len(todo)} of {len(tasks)} episodes already in {out / RESULTS}")
-
-    from contextlib import nullcontext
-
-    from prsc.commands.progress import progress_bar
-
-    appender = _Appender(out / RESULTS, records)
+    results = Results(out, _campaign_key(manifest, args, controller_ref.digest))
+    kept = {k: r for k, r in results.recorded().items() if k < len(tasks)}
+    todo = [t for t in tasks if t.index not in kept]
+    results.begin(kept)
+    if kept:
+        console.print(f"resuming: {len(kept)} of {len(tasks)} episodes already in {out / RESULTS}")
     progress = progress_bar(len(todo), "episodes", "episodes")
     try:
         with progress if progress else nullcontext():
             bar = progress.add_task("episodes", total=len(todo)) if progress else None
 
-            def finished(answer: tuple[str, Any]) -> None:
-                appender(answer)
+            def finished(record: dict) -> None:
+                results.add(record)
                 if progress:
                     progress.advance(bar)
 
             cpu_before = cpu_seconds()
-            executor.map(run_task, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"),
+            run_episodes(executor, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"),
                          todo, finished)
             cpu_used = cpu_seconds() - cpu_before
     finally:
-        appender.close()
+        results.close()
     finished_at = time.perf_counter()
-    ordered = [records[k] for k in sorted(records)]
-    atomic_write(out / RESULTS, "".join(_line(r) + "\n" for r in ordered))  # index order, as a clean run writes
+    ordered = results.finish()  # index order, as a clean run writes
 
     title = f"{source.name}: {len(ordered)} episodes, seed {args.seed}"
     from prsc.backends.runner.report import plot_outcomes, summary_table
@@ -248,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
     plot_outcomes(ordered, out / "outcomes.png", title, declared)
     report = getattr(controller, "report", None)
     if report is not None:
-        report(ordered, [scene for scene, _ in pairs], out, title)
+        report(ordered, scenes, out, title)
     _write_strips(tasks, ordered, out, args.video)
 
     print_table(summary_table(ordered, title, declared))
