@@ -1,6 +1,7 @@
 """10 scenes of every spec, compiled once to every format (one fixture per spec, shared):
 
-- MJCF loads, settles without jumps, and keeps the poses;
+- MJCF loads, settles without jumps, and keeps the poses; every `completely on` object is at
+  rest by `prsc compile --settle-check`'s test;
 - USD validates with zero errors and keeps the poses;
 - each URDF bundle loads in pybullet DIRECT with the poses, free objects fall under gravity
   and fixed ones stay, and yourdfpy validates every file;
@@ -14,7 +15,10 @@ import shutil
 
 import pytest
 
+from prsc.backends.settle_check import settle_scenes
+from prsc.commands.output_folder import compiled_scenes
 from tests.backends import readback
+from tests.backends.test_settle_check import completely_on
 from tests.backends.specs import SCENES_PER_SPEC, all_specs, compiled, spec_id
 
 SPECS = all_specs()
@@ -34,6 +38,18 @@ def test_mjcf_loads_settles_and_keeps_the_poses(spec_output):
         readback.assert_poses(readback.mjcf_poses(model, scene), scene, f"mjcf scene {k}")
         failures += [f"scene {k}: {f}" for f in readback.mjcf_settle_failures(model)]
     assert failures == []
+
+
+def test_every_completely_on_object_is_at_rest(request, spec_output):
+    """`prsc compile --settle-check`'s test on the same scenes (one compile serves both)."""
+    spec = request.node.callspec.params["spec_output"]
+    names = completely_on(spec)
+    if not names:
+        pytest.skip(f"{spec.name} places nothing `completely on`")
+    results = settle_scenes(compiled_scenes(spec_output[0]))
+    assert len(results) == SCENES_PER_SPEC
+    moved = [(r.index, d.name, round(d.distance * 1000, 1), d.cause) for r in results for d in r.drifts if d.name in names]
+    assert not moved, moved
 
 
 def test_usd_validates_and_keeps_the_poses(spec_output):
