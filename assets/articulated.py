@@ -46,6 +46,7 @@ class RobotModel:
     root: str  # the root link (body)
     tcp: str | None  # tool site or body
     actuated: bool  # whether the MJCF has actuators (else it holds its pose by gravity compensation)
+    passive: bool = False  # not a robot (no `tcp`: a cabinet): joints only damped, no servos, no gravity compensation
 
     def mount_position(self, dimensions: tuple[float, float, float]) -> tuple[float, float, float]:
         """The root frame in the object's (box centre) frame."""
@@ -74,7 +75,12 @@ class RobotModel:
             parent = body.parent
             if parent is not None and parent.name and parent.name != "world":
                 spec.add_exclude(bodyname1=parent.name, bodyname2=body.name)
-        if not self.actuated:
+        if self.passive:
+            # Furniture: its joints move when something pushes or pulls them, damped.
+            for joint in spec.joints:
+                joint.damping = [GRAVITY_COMPENSATION_DAMPING, 0.0, 0.0]
+                joint.armature = SERVO_ARMATURE
+        elif not self.actuated:
             # No actuators of its own (a URDF): compensate gravity on every link, damp the
             # joints, and give each joint a position servo named after it, force-limited to
             # the file's effort where it states one, so that controllers can drive it.
@@ -122,24 +128,25 @@ def _panda() -> RobotModel:
 
 
 @lru_cache(maxsize=64)
-def _file_model(path: str, folders: tuple[str, ...]) -> RobotModel:
+def _file_model(path: str, folders: tuple[str, ...], passive: bool) -> RobotModel:
     asset: ArticulatedAsset = describe_asset(path, folders)
     return RobotModel(asset.key, asset.source, folders, asset.joints, 0.0, asset.root_offset, asset.root,
-                      asset.tcp, bool(asset.actuators))
+                      asset.tcp, bool(asset.actuators), passive and not asset.actuators)
 
 
-def robot_model(model: str | None, folders: Sequence[str] = ()) -> RobotModel | None:
-    """The articulated asset a scene object's `model` names, or None for any other model."""
+def robot_model(model: str | None, folders: Sequence[str] = (), passive: bool = False) -> RobotModel | None:
+    """The articulated asset a scene object's `model` names, or None for any other model;
+    `passive`: the object is no robot (it has no `tcp`), so a file without actuators gets none."""
     if model is None:
         return None
     if names_asset_file(model):
-        return _file_model(str(resolve_asset_file(model, folders)), tuple(folders))
+        return _file_model(str(resolve_asset_file(model, folders)), tuple(folders), passive)
     from prsc.assets.registry import is_robot
 
     return _panda() if is_robot(model) == "panda" else None
 
 
-CONVERSION_VERSION = "3"
+CONVERSION_VERSION = "4"  # 4: OBJ files of several objects read whole by MuJoCo
 """Bump when the URDF written for a file asset changes: its build folder's name carries it."""
 
 

@@ -27,7 +27,8 @@ def _decompose(source: Path) -> dict[str, str]:
     import numpy as np
     import trimesh
 
-    mesh = load_mesh(source)
+    loaded = load_mesh(source)
+    mesh = trimesh.Trimesh(loaded.vertices, loaded.faces)  # geometry only: UV seams merged into one solid
     coacd.set_log_level("error")
     pieces = coacd.run_coacd(coacd.Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces)), **SETTINGS)
     if not pieces:

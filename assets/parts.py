@@ -25,6 +25,7 @@ class Part:
     collides: bool = True
     mesh: str | None = None  # normalised mesh file (absolute path) for shape "mesh"
     visible: bool = True  # False: collision geometry only (a convex piece of a decomposed mesh)
+    texture: str | None = None  # base-colour image (absolute path) of a textured mesh part, read through its UVs
 
     @property
     def radius(self) -> float:

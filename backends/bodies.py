@@ -14,7 +14,7 @@ from prsc.assets.articulated import RobotModel, robot_model
 from prsc.assets.registry import part_recipe
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
-from prsc.backends.store import AssetStore
+from prsc.backends.store import AssetStore, texture_of
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior, declared_interior
 from prsc.mesh_paths import MESH_COLLISIONS, mesh_folders, resolve_mesh
@@ -110,15 +110,17 @@ def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part
     try:
         if collision not in MESH_COLLISIONS:
             raise PrscError(f"collision {obj.properties['collision']!r} is not one of {', '.join(MESH_COLLISIONS)}")
-        mesh = store.normalised_mesh(source)
+        mesh = store.normalised_mesh(source, str(obj.properties.get("upAxis", "+z")))
+        texture = texture_of(mesh)
+        seen = Part("mesh", "mesh", obj.dimensions, mesh=str(mesh), texture=None if texture is None else str(texture))
         if collision == "hull":
-            return (Part("mesh", "mesh", obj.dimensions, mesh=str(mesh)),)
+            return (seen,)
         pieces = store.convex_pieces(mesh)
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
     # The mesh is seen; its convex pieces (in the same unit-cube frame, so the same scale)
     # collide and are not drawn.
-    return (Part("mesh", "mesh", obj.dimensions, collides=False, mesh=str(mesh)),
+    return (replace(seen, collides=False),
             *(Part(f"piece{k:02d}", "mesh", obj.dimensions, mesh=str(p), visible=False) for k, p in enumerate(pieces)))
 
 
@@ -133,7 +135,8 @@ def object_interior(obj: SceneObject) -> Interior | None:
 def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
     try:
-        robot = robot_model(obj.model, mesh_folders(scene.spec, store.mesh_dirs))
+        # A file asset is a robot when the scene gives it a `tcp` (every Robot subclass does).
+        robot = robot_model(obj.model, mesh_folders(scene.spec, store.mesh_dirs), passive="tcp" not in obj.properties)
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
     if robot is not None and obj.camera is None:

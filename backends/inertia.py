@@ -37,7 +37,9 @@ def mesh_properties(path: str) -> MeshProperties:
     """Mass properties of a normalised mesh file; its convex hull when it is not a solid."""
     import trimesh
 
-    mesh = trimesh.load(path, force="mesh")
+    loaded = trimesh.load(path, force="mesh")
+    # Geometry only: a textured mesh repeats vertices along its UV seams, merged here into one solid.
+    mesh = trimesh.Trimesh(loaded.vertices, loaded.faces)
     if not mesh.is_volume:
         mesh = mesh.convex_hull
     volume = float(mesh.volume)

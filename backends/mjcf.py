@@ -38,6 +38,7 @@ from prsc.errors import PrscError
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling
 SOLREF = (0.01, 1.0)  # stiffer than the default 0.02 so resting objects sink < 1 mm
 COLLISION_GROUP = 3  # collision-only geoms: MuJoCo's viewer and renderer hide group 3 by default
+TEXTURED_RGBA = (1.0, 1.0, 1.0, 1.0)  # a textured part shows its image's own colours
 CONDIM_FREE = 4  # torsional friction: a held or resting object does not spin in place
 SECTION_ORDER = (
     "compiler", "option", "size", "visual", "statistic", "default", "asset", "worldbody",
@@ -214,6 +215,13 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
                 spec.add_mesh(name=gname, file=str(part.mesh), scale=list(part.size))
                 exact[("mesh", gname)] = {"file": relative_path(part.mesh, folder), "scale": nums(part.size)}
                 kwargs["meshname"] = gname
+                if part.texture is not None:  # its base-colour image through the mesh's UVs, unmodulated
+                    spec.add_texture(name=gname, type=mujoco.mjtTexture.mjTEXTURE_2D, file=str(part.texture),
+                                     colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)  # a PNG says its own
+                    material = spec.add_material(name=gname)
+                    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = gname
+                    exact[("texture", gname)] = {"file": relative_path(part.texture, folder)}
+                    kwargs.update(material=gname, rgba=list(TEXTURED_RGBA))
             else:
                 kwargs["size"] = list(_geom_size(part))
             if not part.collides:
@@ -221,7 +229,7 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
             if not part.visible:
                 kwargs["group"] = COLLISION_GROUP
             b.add_geom(**kwargs)
-            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(obj.color)}
+            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(kwargs["rgba"])}
             if part.shape != "mesh":
                 stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
             exact[("geom", gname)] = stamp
@@ -236,10 +244,11 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
 
 def _stamp(root: ET.Element, exact: dict[tuple[str, str], dict[str, str]]) -> None:
     """Overwrite MjSpec's rounded numbers (and absolute mesh paths) with exact ones."""
-    for mesh in root.iter("mesh"):
-        attrs = exact.get(("mesh", mesh.get("name", "")))
-        if attrs is not None:
-            mesh.attrib.update(attrs)
+    for tag in ("mesh", "texture"):
+        for element in root.iter(tag):
+            attrs = exact.get((tag, element.get("name", "")))
+            if attrs is not None:
+                element.attrib.update(attrs)
     for body in root.iter("body"):
         attrs = exact.get(("body", body.get("name", "")))
         if attrs is None:

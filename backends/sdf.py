@@ -110,7 +110,8 @@ def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
         visual = ET.SubElement(link, "visual", name=f"{part.name}_visual")
         _pose(visual, part.position, part.quaternion)
         _part_geometry(visual, part, folder)
-        _material(visual, obj.color)
+        if part.texture is None:  # a textured mesh's OBJ names its material and image (a <material> would override them)
+            _material(visual, obj.color)
     if body.camera is not None:
         sensor = ET.SubElement(link, "sensor", name=obj.name, type="camera")
         camera_sensor_body(sensor, body.camera)

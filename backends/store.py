@@ -77,17 +77,23 @@ class AssetStore:
         return target
 
     # ------------------------------------------------------------------ meshes
-    def normalised_mesh(self, source: Path) -> Path:
-        """An OBJ of `source` centred on its bounding box and scaled to a unit cube."""
+    def normalised_mesh(self, source: Path, up_axis: str = "+z") -> Path:
+        """An OBJ of `source` turned so `up_axis` points up, centred on its bounding box and
+        scaled to a unit cube. A textured mesh keeps its UVs, and its base-colour image is
+        written beside the OBJ as `<stem>.png` (with `<stem>.mtl` naming it)."""
         try:
             stat = os.stat(source)
-            name = _normalised_name(str(source), stat.st_mtime_ns, stat.st_size)
+            name = _normalised_name(str(source), stat.st_mtime_ns, stat.st_size, up_axis)
         except OSError as error:
             raise PrscError(f"cannot read mesh {source}: {error.strerror or error}") from None
         target = self.root / "meshes" / name
         if not target.is_file():
             target.parent.mkdir(parents=True, exist_ok=True)
-            atomic_write(target, _normalise_mesh_obj(Path(source)))
+            obj, image = _normalise_mesh_obj(Path(source), up_axis, target.stem)
+            if image is not None:  # the OBJ is the cache's marker, so it is written last
+                atomic_write(target.with_suffix(".png"), image)
+                atomic_write(target.with_suffix(".mtl"), f"newmtl texture\nKd 1 1 1\nmap_Kd {target.stem}.png\n")
+            atomic_write(target, obj)
         return target
 
     def convex_pieces(self, normalised: Path) -> tuple[Path, ...]:
@@ -111,21 +117,40 @@ def _robot_usd_source(robot: RobotModel) -> Path:
     return robot_usd_cached(robot.prim_name, robot.urdf, robot.home())
 
 
+def texture_of(normalised: Path | str) -> Path | None:
+    """The base-colour image the store wrote beside a normalised OBJ, if the mesh is textured."""
+    image = Path(normalised).with_suffix(".png")
+    return image if image.is_file() else None
+
+
 @lru_cache(maxsize=256)
-def _normalised_name(source: str, mtime_ns: int, size: int) -> str:
-    """`<stem>-<hash of the file's bytes>.obj` (cached while the file is unchanged)."""
-    return f"{Path(source).stem}-{_sha12(Path(source).read_bytes())}.obj"
+def _normalised_name(source: str, mtime_ns: int, size: int, up_axis: str) -> str:
+    """`<stem>-<hash of the file's bytes and the up axis>.obj` (cached while the file is unchanged)."""
+    # v2: textured meshes keep their UVs and image
+    key = Path(source).read_bytes() + (b"" if up_axis == "+z" else f"\0up{up_axis}".encode()) + b"\0v2"
+    return f"{Path(source).stem}-{_sha12(key)}.obj"
 
 
-def _normalise_mesh_obj(source: Path) -> bytes:
-    """OBJ text of a mesh moved to its bounding-box centre and scaled per axis to size 1."""
+def _normalise_mesh_obj(source: Path, up_axis: str, stem: str) -> tuple[bytes, bytes | None]:
+    """(OBJ text of a mesh turned upright, moved to its bounding-box centre and scaled per axis
+    to size 1; its base-colour image as PNG bytes, or None when it has none)."""
+    import io
+
     import numpy as np
 
-    mesh = load_mesh(source)
+    from prsc.mesh_paths import base_color_image
+
+    mesh = load_mesh(source, up_axis)
     low, high = mesh.bounds
     extent = high - low
     if np.any(extent <= 0):
         raise PrscError(f"mesh {source} is flat (bounding box {extent.tolist()}); it cannot fill a box")
     vertices = (mesh.vertices - (low + high) / 2) / extent
     comments = ("prsc: normalised to a unit cube centred at the origin", f"source: {source.name}")
-    return obj_text(vertices, mesh.faces, comments).encode()
+    image = base_color_image(mesh)
+    if image is None:
+        return obj_text(vertices, mesh.faces, comments).encode(), None
+    png = io.BytesIO()
+    image.save(png, format="PNG")
+    uv = np.asarray(mesh.visual.uv, dtype=float)
+    return obj_text(vertices, mesh.faces, comments, uv=uv, material_file=f"{stem}.mtl").encode(), png.getvalue()

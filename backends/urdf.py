@@ -75,7 +75,12 @@ def _parts_urdf(body: Body, folder: Path) -> ET.Element:
         visual = ET.SubElement(link, "visual", name=part.name)
         _origin(visual, part.position, part.quaternion)
         _geometry(visual, part, folder)
-        ET.SubElement(visual, "material", name=f"{obj.name}_color")
+        if part.texture is None:
+            ET.SubElement(visual, "material", name=f"{obj.name}_color")
+        else:  # white, so the image is not tinted; the OBJ's own MTL names the same image
+            textured = ET.SubElement(visual, "material", name=f"{obj.name}_{part.name}_texture")
+            ET.SubElement(textured, "color", rgba="1 1 1 1")
+            ET.SubElement(textured, "texture", filename=relative_path(part.texture, folder))
     for part in body.parts:
         if not part.collides:
             continue

@@ -79,6 +79,10 @@ def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tupl
     if scale is not None:
         gprim.AddScaleOp(UsdGeom.XformOp.PrecisionDouble).Set(Gf.Vec3d(*(float(s) for s in scale)))
     _color(gprim, rgba)
+    if part.texture is not None:
+        from pxr import UsdShade
+
+        UsdShade.MaterialBindingAPI.Apply(gprim.GetPrim()).Bind(_texture_material(stage, part.texture, folder))
     if not part.visible:
         gprim.CreatePurposeAttr(UsdGeom.Tokens.guide)  # collision only: renderers skip guides
     if part.collides:
@@ -88,8 +92,39 @@ def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tupl
     return gprim
 
 
+def _texture_material(stage, texture: str, folder: Path):
+    """The scene's UsdPreviewSurface material showing `texture` through the mesh's `st` primvar
+    (one per image, under /World/Looks; the image path is relative to the scene file)."""
+    from pxr import Sdf, Tf, UsdGeom, UsdShade
+
+    path = f"/World/Looks/{Tf.MakeValidIdentifier(Path(texture).stem)}"
+    material = UsdShade.Material.Get(stage, path)
+    if material:
+        return material
+    UsdGeom.Scope.Define(stage, "/World/Looks")
+    material = UsdShade.Material.Define(stage, path)
+    reader = UsdShade.Shader.Define(stage, f"{path}/st")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
+    reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+    image = UsdShade.Shader.Define(stage, f"{path}/image")
+    image.CreateIdAttr("UsdUVTexture")
+    image.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(relative_path(texture, folder)))
+    image.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("sRGB")
+    image.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+    image.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
+    surface = UsdShade.Shader.Define(stage, f"{path}/surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(image.ConnectableAPI(), "rgb")
+    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.8)
+    material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
+    return material
+
+
 def _mesh_usd(obj_path: str) -> Path:
-    """A USD layer beside a normalised OBJ holding it as a Mesh default prim (made once)."""
+    """A USD layer beside a normalised OBJ holding it as a Mesh default prim (made once); a
+    textured mesh also holds its UVs as the `st` primvar."""
+    from prsc.backends.store import texture_of
     from prsc.files import atomic_write
 
     target = Path(obj_path).with_suffix(".usda")
@@ -97,7 +132,9 @@ def _mesh_usd(obj_path: str) -> Path:
         import trimesh
         from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
-        mesh = trimesh.load(obj_path, force="mesh")
+        textured = texture_of(obj_path) is not None
+        # A textured OBJ has one UV per vertex as written: read it back in that order.
+        mesh = trimesh.load(obj_path, force="mesh", process=not textured, maintain_order=textured)
         layer = Sdf.Layer.CreateAnonymous(".usda")
         stage = Usd.Stage.Open(layer)
         UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
@@ -110,6 +147,10 @@ def _mesh_usd(obj_path: str) -> Path:
         prim.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.asarray(mesh.faces, dtype=np.int32).reshape(-1)))
         prim.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
         prim.CreateExtentAttr([Gf.Vec3f(*vertices.min(axis=0).tolist()), Gf.Vec3f(*vertices.max(axis=0).tolist())])
+        if textured:
+            uv = np.asarray(mesh.visual.uv, dtype=np.float32)
+            UsdGeom.PrimvarsAPI(prim).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
+                                                    UsdGeom.Tokens.vertex).Set(Vt.Vec2fArray.FromNumpy(uv))
         atomic_write(target, layer.ExportToString())
     return target
 

@@ -266,6 +266,22 @@ def _absolute_asset_paths(spec, path: Path) -> None:
     spec.texturedir = ""
 
 
+def _mujoco_readable_meshes(spec) -> None:
+    """Point every mesh MuJoCo would read only in part at a copy it reads whole."""
+    from prsc.mesh_paths import obj_objects, one_object_obj
+
+    # MuJoCo reads only the first object of an OBJ: pybullet's tray/tray_textured4.obj, five
+    # boxes, would be one wall of the tray in MuJoCo, and its box and convex hull that wall's.
+    # The objects of such a file may overlap, so no volume is exact: a body's mass and inertia
+    # computed from it take its convex hull, the shape it collides as.
+    import mujoco
+
+    for mesh in spec.meshes:
+        if mesh.file.lower().endswith(".obj") and obj_objects(mesh.file) > 1:
+            mesh.file = one_object_obj(mesh.file, build_root() / "assets" / "one-object")
+            mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX
+
+
 def asset_spec(path: Path | str, folders: Sequence[str] = ()):
     """A fresh `mujoco.MjSpec` of an asset file, ready to attach (the one file-to-model path)."""
     import mujoco
@@ -280,6 +296,7 @@ def asset_spec(path: Path | str, folders: Sequence[str] = ()):
             spec.compiler.balanceinertia = True
     except ValueError as error:  # MuJoCo's parse errors
         raise PrscError(f"cannot load {path.name} in MuJoCo: {str(error).strip().splitlines()[0]}") from None
+    _mujoco_readable_meshes(spec)
     return spec
 
 

@@ -70,30 +70,93 @@ def distinct_folders(folders: Sequence[str]) -> tuple[str, ...]:
     return tuple(dict.fromkeys(os.path.normpath(os.path.abspath(folder)) for folder in folders))
 
 
-def mesh_extent(path: Path | str) -> tuple[float, float, float]:
-    """The extent (x, y, z) of a mesh file's bounding box, in the file's units."""
+UP_AXES = ("+z", "+y", "+x", "-z", "-y", "-x")
+"""The values of `upAxis`: the file's axis that points up once the mesh is placed."""
+
+_UP_ROTATIONS = {  # rows: the file's x, y, z axes written in the upright frame
+    "+z": ((1, 0, 0), (0, 1, 0), (0, 0, 1)),
+    "-z": ((1, 0, 0), (0, -1, 0), (0, 0, -1)),  # half a turn about x
+    "+y": ((1, 0, 0), (0, 0, 1), (0, -1, 0)),  # a quarter turn about x: y -> z, z -> -y
+    "-y": ((1, 0, 0), (0, 0, -1), (0, 1, 0)),
+    "+x": ((0, 0, 1), (0, 1, 0), (-1, 0, 0)),  # a quarter turn about y: x -> z, z -> -x
+    "-x": ((0, 0, -1), (0, 1, 0), (1, 0, 0)),
+}
+
+
+def up_rotation(up_axis: str) -> tuple[tuple[int, int, int], ...]:
+    """The rotation (rows: the file's axes in the upright frame) that turns `up_axis` to +z."""
+    try:
+        return _UP_ROTATIONS[up_axis]  # type: ignore[return-value]
+    except KeyError:
+        raise PrscError(f"upAxis {up_axis!r} is not one of {', '.join(UP_AXES)}") from None
+
+
+def mesh_extent(path: Path | str, up_axis: str = "+z") -> tuple[float, float, float]:
+    """The extent (x, y, z) of a mesh file's bounding box once turned upright, in the file's units."""
     stat = os.stat(path)
-    return _mesh_extent(str(path), stat.st_mtime_ns, stat.st_size)
+    return _mesh_extent(str(path), stat.st_mtime_ns, stat.st_size, up_axis)
 
 
 @lru_cache(maxsize=256)
-def _mesh_extent(path: str, mtime_ns: int, size: int) -> tuple[float, float, float]:
+def _mesh_extent(path: str, mtime_ns: int, size: int, up_axis: str) -> tuple[float, float, float]:
     """Bounds of a mesh file (cached while the file is unchanged)."""
-    low, high = load_mesh(path).bounds
+    low, high = load_mesh(path, up_axis).bounds
     return tuple(float(v) for v in high - low)  # type: ignore[return-value]
 
 
-def obj_text(vertices, faces, comments: Sequence[str] = ()) -> str:
-    """A triangle mesh as OBJ text (vertices with full precision, 1-based faces)."""
-    lines = [f"# {c}" for c in comments] + [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
-    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
+def missing_texture_images(path: Path | str) -> tuple[str, ...]:
+    """The texture images an OBJ's material files name that do not exist (trimesh skips them silently)."""
+    path = Path(path)
+    if path.suffix.lower() != ".obj":
+        return ()
+    missing = []
+    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+        if not line.startswith("mtllib "):
+            continue
+        library = path.parent / line.split(None, 1)[1].strip()
+        if not library.is_file():
+            missing.append(str(library))
+            continue
+        for entry in library.read_text(encoding="utf-8", errors="replace").splitlines():
+            words = entry.split()
+            if words and words[0] == "map_Kd" and len(words) > 1 and not (library.parent / words[-1]).is_file():
+                missing.append(str(library.parent / words[-1]))
+    return tuple(missing)
+
+
+def obj_text(vertices, faces, comments: Sequence[str] = (), uv=None, material_file: str | None = None) -> str:
+    """A triangle mesh as OBJ text (vertices with full precision, 1-based faces); with `uv` (one
+    texture coordinate per vertex) and `material_file`, textured by that file's material "texture"."""
+    lines = [f"# {c}" for c in comments]
+    if uv is not None:
+        lines += [f"mtllib {material_file}", "usemtl texture"]
+    lines += [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    if uv is None:
+        lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
+    else:
+        lines += [f"vt {u!r} {v!r}" for u, v in uv.tolist()]
+        lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in faces.tolist()]
     return "\n".join(lines) + "\n"
 
 
-def load_mesh(path: Path | str):
-    """The triangles of a mesh file as a trimesh.Trimesh, or a PrscError saying why not."""
+def base_color_image(mesh):
+    """The base-colour texture (a PIL image) of a trimesh mesh with UVs, or None."""
+    visual = mesh.visual
+    if getattr(visual, "kind", None) != "texture" or getattr(visual, "uv", None) is None:
+        return None
+    if len(visual.uv) != len(mesh.vertices):
+        return None
+    material = visual.material
+    # OBJ/MTL gives a SimpleMaterial (map_Kd), glTF a PBRMaterial (baseColorTexture).
+    return getattr(material, "image", None) or getattr(material, "baseColorTexture", None)
+
+
+def load_mesh(path: Path | str, up_axis: str = "+z"):
+    """The triangles of a mesh file, turned so `up_axis` points up, as a trimesh.Trimesh (with
+    its UVs and material when textured), or a PrscError saying why not."""
     import trimesh
 
+    rotation = up_rotation(up_axis)
     try:
         mesh = trimesh.load(path, force="mesh")
     except Exception:  # trimesh raises many types for unreadable files
@@ -102,4 +165,35 @@ def load_mesh(path: Path | str):
                         "(STL, OBJ, PLY, OFF, GLB/GLTF, ...)") from None
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise PrscError(f"mesh {path} holds no triangles")
+    if up_axis != "+z":
+        import numpy as np
+
+        mesh.vertices = np.asarray(mesh.vertices) @ np.asarray(rotation, dtype=float)
     return mesh
+
+
+def obj_objects(path: str | Path) -> int:
+    """How many objects (`o`/`g` groups) an OBJ file holds."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as text:
+            return sum(1 for line in text if line.startswith(("o ", "g ")))
+    except OSError:
+        return 0
+
+
+def one_object_obj(path: str | Path, cache: Path) -> str:
+    """A one-object copy of an OBJ of several objects, geometry only, in `cache` (by content)."""
+    import hashlib
+
+    import trimesh
+
+    from prsc.files import atomic_write
+
+    source = Path(path)
+    target = cache / hashlib.sha256(source.read_bytes()).hexdigest()[:16] / source.name
+    if not target.is_file():
+        loaded = load_mesh(source)
+        mesh = trimesh.Trimesh(loaded.vertices, loaded.faces)  # MuJoCo takes colours from the asset file
+        target.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(target, obj_text(mesh.vertices, mesh.faces, (f"prsc: {source.name} as one object",)))
+    return str(target)

@@ -89,8 +89,9 @@ def camera_object(scene: dict, name: str) -> dict:
 
 
 def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: str = "iso",
-                 camera_name: str | None = None) -> np.ndarray:
-    """An RGB image (height, width, 3) of one scene from a standard view or a camera object."""
+                 camera_name: str | None = None, include_dirs: Sequence[str] = ()) -> np.ndarray:
+    """An RGB image (height, width, 3) of one scene from a standard view or a camera object
+    (meshes and model files found as `compile -I include_dirs` finds them)."""
     import mujoco
 
     from prsc.backends.mjcf import render
@@ -100,7 +101,7 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: 
 
     path = folder / "mjcf" / f"{scene.get('index', 0)}.xml"
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_bytes(render(parse_scene(scene), path, AssetStore(folder / "assets")))
+    path.write_bytes(render(parse_scene(scene), path, AssetStore(folder / "assets", include_dirs)))
     model = load_model(path)
     data = fresh_data(model)
     if camera_name is not None:
@@ -164,7 +165,7 @@ def preview(file: str, n: int, seed: int, output: str, include_dirs: Sequence[st
         resolutions = [camera_object(scene, camera)["camera"]["resolution"] for scene in scenes]
         sizes = [(TILE[0], max(1, round(TILE[0] * h / w))) for w, h in resolutions]
     with tempfile.TemporaryDirectory(prefix="prsc-preview-") as tmp:
-        images = [render_scene(scene, Path(tmp), size, view, camera) for scene, size in zip(scenes, sizes)]
+        images = [render_scene(scene, Path(tmp), size, view, camera, include_dirs) for scene, size in zip(scenes, sizes)]
     labels = [f"scene {s.get('index', k)}" for k, s in enumerate(scenes)]
     import io
 

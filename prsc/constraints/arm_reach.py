@@ -28,7 +28,7 @@ from prsc.arm_ik import ArmFrames, reach_top_down
 from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 
-RECIPE_VERSION = "2"  # the IK (prsc/arm_ik.py) and the construction below
+RECIPE_VERSION = "3"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = 0.12  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 12  # rays over the half ahead: every 15 degrees from -90 to +90

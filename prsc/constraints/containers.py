@@ -38,10 +38,15 @@ def is_container_asset(low: LoweringState, name: str) -> bool:
 def containers_rested_in(low: LoweringState, obj: ObjectDecl) -> tuple[int, ...]:
     """Indices of the containers the object is placed `on` or `in` (it rests on their floors): those
     declaring an interior, for `completely on` and `in` container assets too (specifiers.interior_of),
-    and furniture whose support surface (`shelf.boards[k]`) it stands on."""
+    furniture whose support surface (`shelf.boards[k]`) it stands on, and articulated objects
+    it is placed on or in a link of (`cabinet.links["drawer"]`)."""
     found = []
     for spec in obj.specifiers:
-        target = getattr(spec, "target", None)
+        target = getattr(spec, "target", getattr(spec, "region", None))
+        if isinstance(spec, (ir.On, ir.In)) and isinstance(target, ir.LinkRef) and isinstance(target.target, ir.ObjectRef):
+            # On or in a link of an articulated object: inside that object's box, bounded by its links.
+            found.append(low.index_of[target.target.name])
+            continue
         if isinstance(spec, (ir.On, ir.StablyOn)) and isinstance(target, ir.SurfaceRef) \
                 and isinstance(target.target, ir.ObjectRef):
             # On a furniture surface (a shelf's board): inside the furniture's box, bounded by its parts.

@@ -299,6 +299,17 @@ class ExprCompiler:
         tf, xf = target.fn, index.fn
         return Compiled(lambda ctx: regions.surface(tf(ctx), name, xf(ctx), span), False)
 
+    def _c_LinkRef(self, e: ir.LinkRef) -> Compiled:
+        from prsc.geometry.link_surfaces import link_surfaces
+        from prsc.ir.format import format_expr
+
+        if e.link is None:
+            raise PrscError(f"{format_expr(e)}: the link was not read from its file", e.span)
+        target, span, chain, offset = self.compile(e.target), e.span, e.link, e.root_offset
+        surfaces, label = link_surfaces(chain.boxes), format_expr(e)
+        tf = target.fn
+        return Compiled(lambda ctx: regions.link(tf(ctx), label, chain, surfaces, offset, ctx, span), False)
+
     def _c_RegionExpr(self, e: ir.RegionExpr) -> Compiled:
         names = [name for name, _ in e.args]
         args = [self.compile(a) for _, a in e.args]

@@ -21,6 +21,7 @@ from prsc.constraints.evaluate import Fn
 from prsc.constraints.model import EXCLUSION_KINDS, REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.position import specifier_rule, workspace_rule
+from prsc.constraints.specifiers import link_target_error
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
@@ -28,8 +29,11 @@ from prsc.constraints.values import DIMENSIONS, ObjectValue, RegionValue, dimens
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import is_feasible
+from prsc.geometry.link_surfaces import link_surfaces
 from prsc.geometry.lp import solve_lp
 from prsc.geometry.polytope import Polytope
+from prsc.ir import model as ir
+from prsc.ir.format import format_expr
 from prsc.ir.program import ObjectDecl, Program
 
 
@@ -78,6 +82,17 @@ def _properties(low: LoweringState, obj: ObjectDecl) -> tuple[dict[str, Fn], dic
     return property_fns, dict(known)
 
 
+def _check_link_targets(obj: ObjectDecl) -> None:
+    """`on`/`in` a link whose geometry has no such surface: an error before any scene (the link's
+    boxes are in its own frame, whatever its pose)."""
+    for spec in obj.specifiers:
+        target = spec.region if isinstance(spec, ir.In) else getattr(spec, "target", None)
+        if isinstance(target, ir.LinkRef) and target.link is not None and isinstance(spec, (ir.In, ir.On)):
+            surfaces = link_surfaces(target.link.boxes)
+            link_target_error(format_expr(target), surfaces.support is not None, surfaces.interior is not None,
+                              isinstance(spec, ir.In), spec.completely, spec.span)
+
+
 def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) -> ObjectPlan:
     name = obj.name
     facts = low.facts
@@ -94,6 +109,7 @@ def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) ->
     me = ObjectValue(name, obj.class_name, obj.span, None, rotation, dims, dict(static_props))
 
     rests_in = containers_rested_in(low, obj)  # first: it refuses a container interior that varies
+    _check_link_targets(obj)
     rules: list[Rule] = []
     exclusions: list[Rule] = []
     for spec in obj.specifiers:

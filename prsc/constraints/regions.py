@@ -7,12 +7,14 @@ from typing import Any, Sequence
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from prsc.constraints.values import ObjectValue, RegionValue, as_position
+from prsc.constraints.values import LinkValue, ObjectValue, RegionValue, as_position
 from prsc.errors import PrscError, Span
 from prsc.geometry.boxes import Box
 from prsc.geometry.furniture import ASSET_SURFACES, asset_surfaces
+from prsc.geometry.link_surfaces import Face, LinkSurfaces
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.rotations import compat_euler_to_matrix
+from prsc.ir.builtins import joint_property
 from prsc.ir.models import model_of
 
 _PLANAR_TOL = 1e-9
@@ -168,3 +170,24 @@ def surface(target: Any, name: str, index: Any, span: Span | None) -> RegionValu
     centre = target.position + rot @ np.asarray(board.centre)
     poly = Polytope.from_rectangle(centre, rot, board.width, board.length)
     return RegionValue("rectangle", poly, up_normal(rot[:, 2]), board.clearance)
+
+
+def link(target: Any, label: str, chain: Any, surfaces: LinkSurfaces, root_offset: Sequence[float], ctx: Any,
+         span: Span | None) -> LinkValue:
+    """`X.links["NAME"]`: the link's support surface and interior moved to X's pose and to
+    X's joint values in this scene (`chain` is the link's prsc.asset_links.AssetLink)."""
+    if not isinstance(target, ObjectValue) or target.position is None or target.rotation is None:
+        raise PrscError(f"{label} needs a placed object", span)
+    joints = {j.name: float(target.get(joint_property(j.name), ctx, span)) for step in chain.chain for j in step.joints}
+    position, rotation = chain.pose(joints)
+    origin = target.position + target.rotation @ (np.asarray(root_offset) + position)
+    axes = target.rotation @ rotation
+
+    def placed(face: Face | None) -> RegionValue | None:
+        if face is None:
+            return None
+        width, length = face.size
+        poly = Polytope.from_rectangle(origin + axes @ np.asarray(face.centre), axes, width, length)
+        return RegionValue("rectangle", poly, up_normal(axes[:, 2]))
+
+    return LinkValue(label, placed(surfaces.support), placed(surfaces.interior))

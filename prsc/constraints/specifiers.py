@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.model import Support
-from prsc.constraints.values import ObjectValue, OrientedPoint, RegionValue, as_position
+from prsc.constraints.values import LinkValue, ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
 from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES, Interior, asset_interior, declared_interior
 from prsc.ir.models import model_of
@@ -82,7 +82,11 @@ def rows_beyond(target: Any, by: Any, origin: Any, label: int, span: Span | None
 
 
 def rows_in(region: Any, completely: bool, support: Support, label: int, span: Span | None) -> Polytope:
-    """`[completely] in R`: p in R, or the whole box in R (erosion of R's inequality rows)."""
+    """`[completely] in R`: p in R, or the whole box in R (erosion of R's inequality rows); in a
+    link, on its floor within its walls."""
+    if isinstance(region, LinkValue):
+        link_target_error(region.label, region.support is not None, region.interior is not None, True, completely, span)
+        return _rows_on_surface(region.interior, completely, support, label, span)  # type: ignore[arg-type]
     if not isinstance(region, RegionValue):
         raise PrscError("'in' needs a region", span)
     poly = region.poly
@@ -115,10 +119,24 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
         return Polytope(a, b, n[None, :], np.array([n @ top + s[0]]), np.full(4, label), np.full(1, label))
     if isinstance(target, RegionValue):
         return _rows_on_surface(target, completely, support, label, span)
+    if isinstance(target, LinkValue):
+        link_target_error(target.label, target.support is not None, target.interior is not None, False, completely, span)
+        return _rows_on_surface(target.support, completely, support, label, span)  # type: ignore[arg-type]
     point = as_position(target)
     if point is not None:
         return _point_rows(point + _UP * float(support(_UP[None, :])[0]), label)
     raise PrscError("'on' needs an object, a planar region or a point", span)
+
+
+def link_target_error(label: str, has_support: bool, hollow: bool, inside: bool, completely: bool,
+                      span: Span | None) -> None:
+    """The error for `on`/`in` a link that has no support surface or is not hollow (none if it fits)."""
+    word = ("completely " if completely else "") + ("in" if inside else "on")
+    if inside and not hollow:
+        raise PrscError(f"`{word} {label}` needs a hollow link (a floor walled on four sides), and {label} is "
+                        f"none: to rest on it write `{'completely on' if completely else 'on'} {label}`", span)
+    if not inside and not has_support:
+        raise PrscError(f"`{word} {label}`: the link has no upward face with free space above it", span)
 
 
 def interior_of(target: ObjectValue, span: Span | None, inside_asset: bool = False) -> Interior | None:

@@ -108,6 +108,16 @@ class RegionValue:
         return self.normal is not None
 
 
+@dataclass(frozen=True)
+class LinkValue:
+    """A link of an articulated object placed in the scene (`X.links["NAME"]`): its support
+    surface and its interior as world rectangles (None where it has none)."""
+
+    label: str  # as written: cabinet.links['drawer']
+    support: RegionValue | None
+    interior: RegionValue | None
+
+
 def as_position(value: Any) -> Vector | None:
     """The position denoted by a vector, face point or object, else None."""
     if isinstance(value, np.ndarray) and value.shape == (3,):

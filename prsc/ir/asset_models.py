@@ -1,20 +1,24 @@
 """Objects whose `model` is the user's own URDF or MJCF file (docs/assets.md): the file is
 found and loaded here, at the line that names it, so `prsc check` reports what `compile`
 would; the object's box becomes the file's, an articulated asset is fixed-base unless it
-says `static False`, and every `with joint "NAME" v` is checked against the file's joints."""
+says `static False`, every `with joint "NAME" v` is checked against the file's joints, and
+every `X.links["NAME"]` is read from X's file (its chain of bodies and collision boxes)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Sequence
 
 from prsc.asset_files import ArticulatedAsset, describe_asset, names_asset_file, resolve_asset_file
+from prsc.asset_links import asset_link
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN, joint_name, joint_property
 from prsc.ir.checks import SIZES
+from prsc.ir.format import format_expr
 from prsc.ir.program import ClassDef, ObjectDecl, Program
 from prsc.ir.scope import did_you_mean
+from prsc.ir.walk import rebuild, walk
 from prsc.mesh_paths import mesh_folders
 
 
@@ -80,6 +84,15 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
                 raise PrscError(f"{obj.name}: the {size} of an asset from a file is the file's ({extent:.4g} m); "
                                 f"remove `{size}`", written.span)
         props[size] = ir.Const(model.span, ir.Type.SCALAR, extent)
+    tcp = props.get("tcp")
+    if asset.has_joints and (tcp is not None or "Robot" in obj.class_chain):
+        # A robot: the scene says so by its tool frame (a Robot subclass always has one).
+        if tcp is None:
+            props["tcp"] = ir.Const(model.span, ir.Type.STRING, asset.tcp or asset.root)
+        elif not (isinstance(tcp, ir.Const) and str(tcp.value) in (*asset.links, *asset.sites)):
+            shown = str(getattr(tcp, "value", ""))
+            raise PrscError(f"{obj.name}: tcp {shown!r} is no link or site of {model.value}"
+                            f"{did_you_mean(shown, (*asset.links, *asset.sites))}", tcp.span)
     static = props.get("static")
     if asset.has_joints and (static is None or static.span.path == BUILTIN_SPAN.path):
         props["static"] = ir.Const(model.span, ir.Type.BOOL, True)
@@ -88,7 +101,7 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
         if joint is not None:
             _check_joint(obj, asset, joint, value)
     # Joints the spec leaves unset start at the file's home: the scene records every joint.
-    order = [name for name in dict(obj.properties) if joint_name(name) is None]
+    order = [name for name in props if joint_name(name) is None]  # the object's own, then static and tcp if added
     for joint in asset.joints:
         prop = joint_property(joint.name)
         if prop not in props:
@@ -105,15 +118,45 @@ def _no_file_joints(obj: ObjectDecl) -> None:
                             value.span)
 
 
+def _linked(obj: ObjectDecl, assets: dict[str, ArticulatedAsset], folders: Sequence[str]) -> ObjectDecl:
+    """`obj` with every `X.links["NAME"]` in its specifiers read from X's file (or an error there)."""
+
+    def resolve(node: ir.Expr) -> ir.Expr | None:
+        if not isinstance(node, ir.LinkRef):
+            return None
+        target = node.target
+        asset = assets.get(target.name) if isinstance(target, ir.ObjectRef) else None
+        if asset is None:
+            raise PrscError(f"{format_expr(target)} has no links: only an object whose model is a URDF or MJCF "
+                            "file has them", node.span)
+        try:
+            link = asset_link(asset, node.name, folders)
+        except PrscError as error:
+            raise PrscError(f"{format_expr(target)}.links: {error.message}", node.span) from None
+        return replace(node, link=link, root_offset=asset.root_offset)
+
+    specifiers = []
+    for spec in obj.specifiers:
+        linked = {f.name: getattr(spec, f.name) for f in fields(spec) if isinstance(getattr(spec, f.name), ir.Expr)
+                  and any(isinstance(node, ir.LinkRef) for node in walk(getattr(spec, f.name)))}
+        changes = {name: rebuild(expr, resolve) for name, expr in linked.items()}
+        specifiers.append(replace(spec, **changes) if changes else spec)
+    return replace(obj, specifiers=tuple(specifiers))
+
+
 def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Program:
-    """The program with every file-model object fitted to its file (box, base, joints)."""
+    """The program with every file-model object fitted to its file (box, base, joints), and every
+    link its specifiers name read from the file."""
     folders = mesh_folders(program.path, include_dirs)
     classes = {c.name: c for c in program.classes}
     objects = []
+    assets: dict[str, ArticulatedAsset] = {}
     for obj in program.objects:
+        obj = _linked(obj, assets, folders)  # a link's object comes earlier (it depends on it)
         model = obj.prop("model")
         if isinstance(model, ir.Const) and names_asset_file(model.value):
             obj = _fitted(obj, model, folders, classes)
+            assets[obj.name] = describe_asset(str(obj.prop("model").value), folders)
         else:
             _no_file_joints(obj)
         objects.append(obj)

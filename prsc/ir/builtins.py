@@ -32,7 +32,9 @@ PROPERTY_TYPES: dict[str, frozenset[Type]] = {
     "mesh": frozenset({Type.STRING}),
     "scale": frozenset({Type.SCALAR}),  # mesh file units -> metres, for sizes taken from the mesh
     "collision": frozenset({Type.STRING}),  # a mesh's collision geometry: "hull" or "decomposed"
+    "upAxis": frozenset({Type.STRING}),  # the mesh file's axis that points up: "+z" (default), "+y", ...
     "model": frozenset({Type.STRING}),
+    "tcp": frozenset({Type.STRING}),  # a robot's tool link, body or site (docs/assets.md)
     "camera": frozenset({Type.BOOL}),
     "fovy": frozenset({Type.SCALAR}),
     "resolution": frozenset({Type.LIST}),

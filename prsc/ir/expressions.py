@@ -150,6 +150,12 @@ class ExprResolver:
         attr = e.target
         if isinstance(attr, nodes.Attribute):
             target = self.resolve(attr.target)
+            owner = self._object_class(target) if target.type == T.OBJECT else None
+            if attr.name == "links" and target.type == T.OBJECT and (owner is None or not owner.has("links")):
+                name = self.resolve(e.index)
+                if not (isinstance(name, ir.Const) and name.type == T.STRING):
+                    raise PrscError('a link is named by a string, as in cabinet.links["drawer"]', e.index.span)
+                return ir.LinkRef(e.span, T.REGION, target, str(name.value))
             cls = self._object_class(target) if target.type == T.OBJECT else None
             if cls is not None and attr.name in declared_surfaces(cls) and not cls.has(attr.name):
                 index = expect(self.resolve(e.index), {T.SCALAR}, f"the index of {attr.name}")

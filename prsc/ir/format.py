@@ -94,6 +94,8 @@ def format_expr(expr: ir.Expr) -> str:
         return f"{_DISTRIBUTION_NAMES[expr.kind]}(" + ", ".join(format_expr(a) for a in expr.args) + ")"
     if isinstance(expr, ir.SurfaceRef):
         return f"{_wrap(expr.target, 10)}.{expr.name}[{format_expr(expr.index)}]"
+    if isinstance(expr, ir.LinkRef):
+        return f"{_wrap(expr.target, 10)}.links[{expr.name!r}]"
     if isinstance(expr, ir.RegionExpr):
         args = ", ".join(f"{k}={format_expr(v)}" for k, v in expr.args)
         return f"{_REGION_NAMES.get(expr.kind, expr.kind)}({args})"

@@ -13,7 +13,7 @@ from prsc.ir.program import ObjectDecl, Program
 from prsc.ir.builtins import BUILTIN_SPAN
 from prsc.ir.checks import SIZES
 from prsc.ir.scope import did_you_mean
-from prsc.mesh_paths import MESH_COLLISIONS, mesh_extent, mesh_folders, resolve_mesh
+from prsc.mesh_paths import MESH_COLLISIONS, UP_AXES, mesh_extent, mesh_folders, missing_texture_images, resolve_mesh
 
 
 def _builtin(expr: ir.Expr | None) -> bool:
@@ -37,9 +37,29 @@ def _mesh_file(obj: ObjectDecl, raw: str, mesh: ir.Expr, folders: Sequence[str])
     try:
         # Existence only: whether a path outside the spec's folders may be read is the
         # compiling command's decision (--meshes-anywhere).
-        return resolve_mesh(raw, folders, anywhere=True)
+        found = resolve_mesh(raw, folders, anywhere=True)
     except PrscError as error:
         raise PrscError(f"{obj.name}: {error.message}", mesh.span) from None
+    missing = missing_texture_images(found)
+    if missing:
+        raise PrscError(f"{obj.name}: mesh {raw!r} names a texture image or material file that does not exist: "
+                        f"{missing[0]}", mesh.span)
+    return found
+
+
+def _up_axis(obj: ObjectDecl, props: dict[str, ir.Expr]) -> str:
+    """The object's constant `upAxis` ("+z" when unset), or an error at its value."""
+    expr = props.get("upAxis")
+    if expr is None:
+        return "+z"
+    value = str(expr.value).strip().lower() if isinstance(expr, ir.Const) else None
+    if value in ("y", "x", "z"):
+        value = "+" + value
+    if value not in UP_AXES:
+        shown = repr(expr.value) if isinstance(expr, ir.Const) else "a value that is not a constant"
+        raise PrscError(f"{obj.name}: upAxis is {shown}; it is one constant of {', '.join(UP_AXES)}"
+                        f"{did_you_mean(str(getattr(expr, 'value', '')), UP_AXES)}", expr.span)
+    return value
 
 
 def _sized(obj: ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ObjectDecl:
@@ -54,6 +74,9 @@ def _sized(obj: ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ObjectDecl
     if isinstance(collision, ir.Const) and str(collision.value).strip().lower() not in MESH_COLLISIONS:
         raise PrscError(f"unknown collision {collision.value!r} for a mesh (one of {', '.join(MESH_COLLISIONS)})"
                         f"{did_you_mean(str(collision.value), MESH_COLLISIONS)}", collision.span)
+    up_axis = _up_axis(obj, props)
+    if "upAxis" in props:
+        props["upAxis"] = ir.Const(props["upAxis"].span, ir.Type.STRING, up_axis)  # the JSON holds one spelling
     names = _constant_strings(mesh)
     files = [_mesh_file(obj, raw, mesh, folders) for raw in names or ()]
     unset = [i for i, prop in enumerate(SIZES) if _builtin(props.get(prop))]
@@ -62,7 +85,7 @@ def _sized(obj: ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ObjectDecl
                         f"bounds; give {', '.join(SIZES[i] for i in unset)}", mesh.span)
     if unset:
         try:
-            extent = mesh_extent(files[0])
+            extent = mesh_extent(files[0], up_axis)
         except PrscError as error:
             raise PrscError(f"{obj.name}: {error.message}", mesh.span) from None
         scale = props.get("scale")

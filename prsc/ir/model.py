@@ -12,6 +12,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
+from prsc.asset_links import AssetLink
 from prsc.errors import Span
 
 
@@ -199,6 +200,19 @@ class SurfaceRef(Expr):
     target: Expr
     name: str
     index: Expr
+
+
+@dataclass(frozen=True)
+class LinkRef(Expr):
+    """`X.links["NAME"]`: link NAME of X's URDF or MJCF asset at the scene's joint values, a
+    target of `on` and `in` (docs/assets.md, "Links"). `link` (the chain to it and its
+    collision boxes) and `root_offset` (the asset's root in X's box) are read from the file
+    by ir/asset_models.py."""
+
+    target: Expr
+    name: str
+    link: AssetLink | None = None
+    root_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 # ---------------------------------------------------------------- specifiers

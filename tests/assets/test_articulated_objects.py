@@ -1,0 +1,141 @@
+"""Articulated furniture (docs/assets.md, "Links"): the tests' own cabinet URDF with a drawer
+pulled out to a sampled value, a cube `completely in` the drawer and one `completely on` the
+carcass. The drawer's value is the MJCF `home` key's, the cube rests on the drawer's floor
+inside its walls, and a gentle pull moves the drawer with the cube riding along; links
+that do not exist or are not hollow are errors `prsc check` reports at their line."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.backends import readback
+
+DATA = Path(__file__).resolve().parent / "data"
+SCENES = 10
+SPEC = """\
+from tabletop import *
+
+class Cabinet:
+    model: "cabinet.urdf"
+
+cab = Cabinet on Vector3D(0, 0, 0), with joint "drawer_slide" (0.05, 0.2)
+cube = Cube completely in cab.links["drawer"], with color "red"
+box = Cube completely on cab.links["carcass"], with color "blue"
+"""
+FLOOR = (-0.21, 0.21, -0.17, 0.18, 0.01)  # the drawer's floor inside its walls (x, x, y, y, z in its frame)
+
+
+def _prsc(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "prsc.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("cabinet")
+    shutil.copy(DATA / "cabinet.urdf", folder / "cabinet.urdf")
+    (folder / "cab.prs").write_text(SPEC)
+    done = _prsc("compile", str(folder / "cab.prs"), "-n", str(SCENES), "--target", "json,mjcf,urdf,sdf,usd",
+                 "-o", str(folder / "out"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    return folder / "out" / "cab"
+
+
+def _scene(root: Path, k: int):
+    import mujoco
+
+    scene = json.loads((root / "json" / f"{k:05d}.json").read_text())
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    return scene, model, data
+
+
+def test_the_home_key_holds_the_drawer_at_the_scene_value(compiled):
+    values = []
+    for k in range(SCENES):
+        scene, model, data = _scene(compiled, k)
+        cab = next(o for o in scene["objects"] if o["name"] == "cab")
+        value = cab["joints"]["drawer_slide"]
+        assert 0.05 <= value <= 0.2
+        assert data.qpos[model.joint("cab/drawer_slide").qposadr[0]] == pytest.approx(value, abs=1e-12)
+        assert cab["static"] and "tcp" not in cab["properties"]  # fixed furniture, no robot
+        assert model.nu == 0  # no servo holds a cabinet's drawer
+        values.append(value)
+    assert len(set(values)) == SCENES  # drawn per scene
+
+
+def test_the_cube_rests_on_the_drawer_floor_inside_its_walls(compiled):
+    import mujoco
+
+    for k in range(SCENES):
+        scene, model, data = _scene(compiled, k)
+        cube = next(o for o in scene["objects"] if o["name"] == "cube")
+        drawer = model.body("cab/drawer").id
+        frame = data.xmat[drawer].reshape(3, 3)
+        local = frame.T @ (np.asarray(cube["position"]) - data.xpos[drawer])
+        half = np.asarray(cube["dimensions"]) / 2
+        x0, x1, y0, y1, z = FLOOR
+        assert x0 - 1e-9 <= local[0] - half[0] and local[0] + half[0] <= x1 + 1e-9, (k, local)
+        assert y0 - 1e-9 <= local[1] - half[1] and local[1] + half[1] <= y1 + 1e-9, (k, local)
+        assert local[2] - half[2] == pytest.approx(z, abs=1e-9)
+        body = model.body("cube").id
+        start = data.xpos[body].copy()
+        while data.time < 1.0:
+            mujoco.mj_step(model, data)
+        assert np.linalg.norm(data.xpos[body] - start) < 0.002, k
+
+
+def test_a_gentle_pull_moves_the_drawer_and_the_cube_rides_along(compiled):
+    import mujoco
+
+    for k in range(SCENES):
+        _, model, data = _scene(compiled, k)
+        joint = model.joint("cab/drawer_slide").qposadr[0]
+        drawer, cube = model.body("cab/drawer").id, model.body("cube").id
+        while data.time < 0.5:
+            mujoco.mj_step(model, data)
+        drawer_start, cube_start, opened = data.xpos[drawer].copy(), data.xpos[cube].copy(), data.qpos[joint]
+        while data.qpos[joint] < opened + 0.02:  # 1 N along the drawer's axis until it has moved 2 cm
+            data.xfrc_applied[drawer, :3] = data.xmat[drawer].reshape(3, 3) @ np.array([0.0, 1.0, 0.0])
+            mujoco.mj_step(model, data)
+        data.xfrc_applied[:] = 0.0
+        stop = data.time + 2.0
+        while data.time < stop:
+            mujoco.mj_step(model, data)
+        moved = data.xpos[drawer] - drawer_start
+        assert np.linalg.norm(moved) > 0.02, k
+        assert np.linalg.norm((data.xpos[cube] - cube_start) - moved) < 0.01, k
+
+
+def test_every_format_carries_the_cabinet(compiled):
+    for k in range(2):
+        assert readback.usd_errors(compiled / "usd" / f"{k:05d}.usda") == []
+        readback.urdf_validate(compiled / "urdf" / f"{k:05d}")
+        poses = readback.sdf_poses(compiled / "sdf" / f"{k:05d}.sdf")
+        assert {"cab", "cube", "box"} <= set(poses)
+
+
+@pytest.mark.parametrize("line, message", [
+    ('cube = Cube completely in cab.links["drawr"]', "has no link 'drawr'"),
+    ('cube = Cube completely in cab.links["carcass"]', "needs a hollow link"),
+    ('cube = Cube completely in t.links["drawer"]', "t has no links"),
+])
+def test_check_reports_a_bad_link_at_its_line(tmp_path, line, message):
+    shutil.copy(DATA / "cabinet.urdf", tmp_path / "cabinet.urdf")
+    text = SPEC.replace('cube = Cube completely in cab.links["drawer"], with color "red"', line)
+    text = text.replace("cab = Cabinet", "t = Table on Vector3D(0, 1.5, 0)\ncab = Cabinet")
+    (tmp_path / "cab.prs").write_text(text)
+    line_number = text.splitlines().index(line) + 1
+    for command in ("check", "compile"):
+        done = _prsc(command, str(tmp_path / "cab.prs"), *(["-o", str(tmp_path / "out")] if command == "compile" else []))
+        assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+        assert f"cab.prs:{line_number}:" in done.stderr and message in done.stderr, done.stderr
+    assert not (tmp_path / "out").exists()

@@ -1,0 +1,220 @@
+"""Textured meshes as users bring them (docs/backends.md, "Textured meshes"): pybullet's
+duck (OBJ + MTL + PNG, modelled y-up) and the same duck as a GLB keep their UVs and
+base-colour image in every format, stand upright with `upAxis "+y"`, and a missing image
+is an error `prsc check` reports at the line that names the mesh."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.backends import readback
+
+pybullet_data = pytest.importorskip("pybullet_data")
+DATA = Path(pybullet_data.getDataPath())
+DUCK_SCALE = 0.1  # duck.obj is 1.65 x 1.54 x 1.15 units (x, y-up, z)
+
+SPEC = """\
+from tabletop import *
+
+class Duck:
+    mesh: "duck.obj"
+    upAxis: "+y"
+    scale: 0.1
+
+class GlbDuck:
+    mesh: "duck.glb"
+    upAxis: "+y"
+    scale: 0.1
+
+t = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75
+d = Duck completely on t
+g = GlbDuck completely on t
+"""
+
+
+def _prsc(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "prsc.cli", *args], capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def compiled(tmp_path_factory) -> Path:
+    """The duck spec compiled to every format, then moved: the output folder as a user copies it."""
+    import trimesh
+
+    folder = tmp_path_factory.mktemp("ducks")
+    trimesh.load(DATA / "duck.obj", force="mesh").export(folder / "duck.glb")
+    (folder / "ducks.prs").write_text(SPEC)
+    done = _prsc("compile", str(folder / "ducks.prs"), "-I", str(DATA), "-n", "2",
+                 "--target", "json,mjcf,urdf,sdf,usd", "-o", str(folder / "out"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    moved = folder / "moved"
+    shutil.move(folder / "out", moved)
+    return moved / "ducks"
+
+
+def _model(root: Path):
+    import mujoco
+
+    return mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+
+
+def test_mjcf_has_the_texture_and_the_mesh_its_uvs(compiled):
+    import mujoco
+
+    model = _model(compiled)
+    for name in ("d/mesh", "g/mesh"):
+        mesh = model.mesh(name).id
+        assert model.mesh_texcoordnum[mesh] == model.mesh_vertnum[mesh] > 0
+        geom = model.geom(name)
+        material = int(geom.matid[0])
+        texture = model.mat_texid[material, mujoco.mjtTextureRole.mjTEXROLE_RGB]
+        assert texture >= 0 and model.tex_width[texture] == 512  # duckCM.png is 512 x 512
+    assert model.ntex >= 3  # the floor's checker and one per duck
+
+
+def _duck_pixels(model, data, textured: bool) -> np.ndarray:
+    """The RGB pixels of duck `d` seen from the front, with its texture on or off."""
+    import mujoco
+
+    model = model if textured else _untextured(model)
+    renderer = mujoco.Renderer(model, 240, 320)
+    camera = mujoco.MjvCamera()
+    camera.lookat[:] = data.xpos[model.body("d").id]
+    camera.distance, camera.azimuth, camera.elevation = 0.35, 0.0, -15.0
+    renderer.update_scene(data, camera)
+    image = renderer.render().copy()
+    renderer.enable_segmentation_rendering()
+    renderer.update_scene(data, camera)
+    ids = renderer.render()[..., 0]
+    renderer.close()
+    return image[ids == model.geom("d/mesh").id].astype(float)
+
+
+def _untextured(model):
+    import copy
+
+    import mujoco
+
+    plain = copy.copy(model)
+    plain.mat_texid[:, mujoco.mjtTextureRole.mjTEXROLE_RGB] = -1
+    return plain
+
+
+def test_a_render_shows_the_texture(compiled):
+    import mujoco
+
+    model = _model(compiled)
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    textured = _duck_pixels(model, data, True)
+    plain = _duck_pixels(model, data, False)
+    assert len(textured) > 2000  # the duck fills a good part of the view
+    # A white untextured duck is white and grey; the textured one is yellow (blue well below red).
+    assert np.mean(plain[:, 0] - plain[:, 2]) < 5
+    assert np.mean(textured[:, 0] - textured[:, 2]) > 60
+    # Not a single colour: the image's yellows and oranges give far more colour bins than shading alone.
+    bins = [len({tuple(p) for p in (pixels // 32).astype(int)}) for pixels in (textured, plain)]
+    assert bins[0] >= 2 * bins[1], bins  # measured: 50 against 16
+
+
+def test_the_y_up_duck_stands_upright_and_rests(compiled):
+    import mujoco
+
+    scene = json.loads((compiled / "json" / "00000.json").read_text())
+    duck = next(o for o in scene["objects"] if o["name"] == "d")
+    low, high = np.array([-0.961799, 0.099294, -0.539252]), np.array([0.692985, 1.6397, 0.613282])
+    extent = (high - low) * DUCK_SCALE
+    np.testing.assert_allclose(duck["dimensions"], [extent[0], extent[2], extent[1]], rtol=1e-6)
+    model = _model(compiled)
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    start = data.xpos[model.body("d").id].copy()
+    while data.time < 1.0:
+        mujoco.mj_step(model, data)
+    assert np.linalg.norm(data.xpos[model.body("d").id] - start) < 0.002
+
+
+def test_usd_has_uvs_and_a_preview_surface_whose_image_resolves_after_a_move(compiled):
+    from pxr import Usd, UsdGeom, UsdShade
+
+    path = compiled / "usd" / "00000.usda"
+    assert readback.usd_errors(path) == []
+    stage = Usd.Stage.Open(str(path))
+    for name in ("d", "g"):
+        prim = stage.GetPrimAtPath(f"/World/{name}/mesh")
+        st = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")
+        assert st and len(st.Get()) == len(UsdGeom.Mesh(prim).GetPointsAttr().Get())
+        material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        surface = material.ComputeSurfaceSource()[0]
+        assert surface.GetIdAttr().Get() == "UsdPreviewSurface"
+        image = surface.GetInput("diffuseColor").GetConnectedSources()[0][0].source
+        shader = UsdShade.Shader(image.GetPrim())
+        assert shader.GetIdAttr().Get() == "UsdUVTexture"
+        resolved = shader.GetInput("file").Get().resolvedPath
+        assert resolved and Path(resolved).is_file() and Path(resolved).is_relative_to(compiled)
+
+
+def test_urdf_and_sdf_carry_the_mesh_with_its_material_and_image(compiled):
+    import xml.etree.ElementTree as ET
+
+    import pybullet as p
+
+    bundle = compiled / "urdf" / "00000"
+    client = p.connect(p.DIRECT)
+    try:
+        body = p.loadURDF(str(bundle / "d.urdf"), physicsClientId=client)
+        shapes = p.getVisualShapeData(body, flags=p.VISUAL_SHAPE_DATA_TEXTURE_UNIQUE_IDS, physicsClientId=client)
+        assert shapes[0][7] == (1.0, 1.0, 1.0, 1.0)  # white: the image is not tinted
+        assert shapes[0][8] >= 0  # pybullet loaded a texture for it
+    finally:
+        p.disconnect(client)
+    sdf = ET.parse(compiled / "sdf" / "00000.sdf")
+    visual = next(v for v in sdf.iter("visual") if v.get("name") == "mesh_visual"
+                  and v.find("geometry/mesh/uri").text.endswith(".obj"))
+    assert visual.find("material") is None  # the OBJ's MTL colours it
+    obj = (compiled / "sdf" / visual.find("geometry/mesh/uri").text).resolve()
+    assert f"mtllib {obj.stem}.mtl" in obj.read_text()
+    assert f"map_Kd {obj.stem}.png" in obj.with_suffix(".mtl").read_text()
+    assert obj.with_suffix(".png").is_file()
+
+
+@pytest.mark.parametrize("case", ["missing image", "bad upAxis"])
+def test_check_reports_a_missing_image_and_a_bad_up_axis_at_the_line(tmp_path, case):
+    shutil.copy(DATA / "duck.obj", tmp_path / "duck.obj")
+    shutil.copy(DATA / "duck.mtl", tmp_path / "duck.mtl")  # names duckCM.png, which is not copied
+    up = '"+y"' if case == "missing image" else '"up"'
+    if case == "bad upAxis":
+        shutil.copy(DATA / "duckCM.png", tmp_path / "duckCM.png")
+    (tmp_path / "spec.prs").write_text(f'from tabletop import *\nt = Table on Vector3D(0, 0, 0)\n'
+                                       f'd = Object completely on t, with mesh "duck.obj", with upAxis {up}\n')
+    for command in ("check", "compile"):
+        done = _prsc(command, str(tmp_path / "spec.prs"), *(["-o", str(tmp_path / "out")] if command == "compile" else []))
+        assert done.returncode == 2, done.stdout + done.stderr
+        assert "Traceback" not in done.stderr
+        if case == "missing image":
+            assert "spec.prs:3:39" in done.stderr and "duckCM.png" in done.stderr, done.stderr
+        else:
+            assert "spec.prs:3:" in done.stderr and "upAxis is 'up'" in done.stderr, done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_preview_finds_the_mesh_in_the_include_folder_and_shows_its_texture(tmp_path):
+    from PIL import Image
+
+    (tmp_path / "duck.prs").write_text('from tabletop import *\nt = Table on Vector3D(0, 0, 0), with width 0.5, '
+                                       'with length 0.5, with height 0.75\n'
+                                       'd = Object completely on t, with mesh "duck.obj", with upAxis "+y", '
+                                       'with scale 0.15\n')
+    done = _prsc("preview", str(tmp_path / "duck.prs"), "-I", str(DATA), "-n", "1", "-o", str(tmp_path / "sheet.png"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    pixels = np.asarray(Image.open(tmp_path / "sheet.png").convert("RGB")).reshape(-1, 3).astype(int)
+    yellow = (pixels[:, 0] > 150) & (pixels[:, 1] > 120) & (pixels[:, 2] < 60)  # the duck's texture, nothing else
+    assert yellow.sum() > 500, yellow.sum()
