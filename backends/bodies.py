@@ -159,7 +159,20 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     if obj.camera is not None:
         # A camera is a sensor: whatever its housing looks like, it never collides.
         parts = tuple(replace(p, collides=False) for p in parts)
+    if "texture" in obj.properties:
+        parts = _textured(parts, obj, scene, store)
     return Body(obj, parts, composite_inertial(parts, obj.mass), None, obj.camera)
+
+
+def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
+    """`with texture`: the image on every face of the object's visible boxes."""
+    try:
+        source = resolve_mesh(str(obj.properties["texture"]), mesh_folders(scene.spec, store.mesh_dirs),
+                              store.meshes_anywhere)
+        image = str(store.texture_image(source))
+    except PrscError as error:
+        raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
+    return tuple(replace(p, texture=image) if p.shape == "box" and p.visible else p for p in parts)
 
 
 def resolve_bodies(scene: Scene, store: AssetStore) -> tuple[Body, ...]:

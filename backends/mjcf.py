@@ -215,15 +215,17 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
                 spec.add_mesh(name=gname, file=str(part.mesh), scale=list(part.size))
                 exact[("mesh", gname)] = {"file": relative_path(part.mesh, folder), "scale": nums(part.size)}
                 kwargs["meshname"] = gname
-                if part.texture is not None:  # its base-colour image through the mesh's UVs, unmodulated
-                    spec.add_texture(name=gname, type=mujoco.mjtTexture.mjTEXTURE_2D, file=str(part.texture),
-                                     colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)  # a PNG says its own
-                    material = spec.add_material(name=gname)
-                    material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = gname
-                    exact[("texture", gname)] = {"file": relative_path(part.texture, folder)}
-                    kwargs.update(material=gname, rgba=list(TEXTURED_RGBA))
             else:
                 kwargs["size"] = list(_geom_size(part))
+            if part.texture is not None:
+                # A mesh reads its image through its UVs; `with texture` shows it on each face of a box.
+                kind = mujoco.mjtTexture.mjTEXTURE_2D if part.shape == "mesh" else mujoco.mjtTexture.mjTEXTURE_CUBE
+                spec.add_texture(name=gname, type=kind, file=str(part.texture),
+                                 colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)  # a PNG says its own
+                material = spec.add_material(name=gname)
+                material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = gname
+                exact[("texture", gname)] = {"file": relative_path(part.texture, folder)}
+                kwargs.update(material=gname, rgba=list(TEXTURED_RGBA))  # unmodulated
             if not part.collides:
                 kwargs.update(contype=0, conaffinity=0)
             if not part.visible:

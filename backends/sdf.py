@@ -110,8 +110,12 @@ def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
         visual = ET.SubElement(link, "visual", name=f"{part.name}_visual")
         _pose(visual, part.position, part.quaternion)
         _part_geometry(visual, part, folder)
-        if part.texture is None:  # a textured mesh's OBJ names its material and image (a <material> would override them)
+        if part.texture is None:
             _material(visual, obj.color)
+        elif part.shape != "mesh":  # a textured mesh's OBJ names its material and image (a <material> would override them)
+            _material(visual, (1.0, 1.0, 1.0, 1.0))
+            metal = ET.SubElement(ET.SubElement(visual.find("material"), "pbr"), "metal")
+            ET.SubElement(metal, "albedo_map").text = relative_path(part.texture, folder)
     if body.camera is not None:
         sensor = ET.SubElement(link, "sensor", name=obj.name, type="camera")
         camera_sensor_body(sensor, body.camera)

@@ -96,6 +96,21 @@ class AssetStore:
             atomic_write(target, obj)
         return target
 
+    def texture_image(self, source: Path) -> Path:
+        """The store's PNG copy of an image `with texture` names (`textures/<stem>-<hash>.png`)."""
+        import io
+
+        from prsc.mesh_paths import read_image
+
+        data = Path(source).read_bytes()
+        target = self.root / "textures" / f"{Path(source).stem}-{_sha12(data)}.png"
+        if not target.is_file():
+            png = io.BytesIO()
+            read_image(source).save(png, format="PNG")
+            target.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(target, png.getvalue())
+        return target
+
     def convex_pieces(self, normalised: Path) -> tuple[Path, ...]:
         """The store's copies of the convex pieces of a normalised mesh (decomposed once, cached)."""
         from prsc.assets.convex_pieces import convex_pieces

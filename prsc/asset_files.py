@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.errors import PrscError
+from prsc.mesh_paths import mujoco_readable_meshes
 
 ASSET_SUFFIXES = (".urdf", ".xml", ".mjcf")
 """File names that make `model "..."` a file of the user's own rather than a library name."""
@@ -266,20 +267,17 @@ def _absolute_asset_paths(spec, path: Path) -> None:
     spec.texturedir = ""
 
 
-def _mujoco_readable_meshes(spec) -> None:
-    """Point every mesh MuJoCo would read only in part at a copy it reads whole."""
-    from prsc.mesh_paths import obj_objects, one_object_obj
+COLLISION_GROUP = 3
+"""MuJoCo's renderer and viewer hide geom group 3 by default (the MJCF backend's own)."""
 
-    # MuJoCo reads only the first object of an OBJ: pybullet's tray/tray_textured4.obj, five
-    # boxes, would be one wall of the tray in MuJoCo, and its box and convex hull that wall's.
-    # The objects of such a file may overlap, so no volume is exact: a body's mass and inertia
-    # computed from it take its convex hull, the shape it collides as.
-    import mujoco
 
-    for mesh in spec.meshes:
-        if mesh.file.lower().endswith(".obj") and obj_objects(mesh.file) > 1:
-            mesh.file = one_object_obj(mesh.file, build_root() / "assets" / "one-object")
-            mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX
+def _hide_collision_geoms(spec) -> None:
+    """A URDF link's `<collision>` geoms in the hidden group where it has `<visual>` ones: drawn
+    too, they would flicker through the visuals (a textured table top showing white triangles)."""
+    drawn = {geom.parent.name for geom in spec.geoms if geom.contype == 0 and geom.conaffinity == 0}
+    for geom in spec.geoms:
+        if (geom.contype or geom.conaffinity) and geom.parent.name in drawn:
+            geom.group = COLLISION_GROUP
 
 
 def asset_spec(path: Path | str, folders: Sequence[str] = ()):
@@ -290,13 +288,14 @@ def asset_spec(path: Path | str, folders: Sequence[str] = ()):
     try:
         if path.suffix.lower() == ".urdf":
             spec = mujoco.MjSpec.from_string(_urdf_text(path, folders))
+            _hide_collision_geoms(spec)
         else:
             spec = mujoco.MjSpec.from_file(str(path))
             _absolute_asset_paths(spec, path)
             spec.compiler.balanceinertia = True
     except ValueError as error:  # MuJoCo's parse errors
         raise PrscError(f"cannot load {path.name} in MuJoCo: {str(error).strip().splitlines()[0]}") from None
-    _mujoco_readable_meshes(spec)
+    mujoco_readable_meshes(spec, build_root() / "assets")
     return spec
 
 

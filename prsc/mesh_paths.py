@@ -4,6 +4,9 @@ prsc's model library (the repository's specs/, as for imports), and nowhere else
 A path that is absolute or climbs out of those folders with `..` is read only when the
 user says so (`--meshes-anywhere`): a spec from elsewhere cannot make prsc copy any
 readable file into its outputs.
+
+Also what every stage reads of a mesh file: its triangles turned upright (`upAxis`), its
+UVs and base-colour image, and the copies MuJoCo needs to read an OBJ whole.
 """
 
 from __future__ import annotations
@@ -104,24 +107,33 @@ def _mesh_extent(path: str, mtime_ns: int, size: int, up_axis: str) -> tuple[flo
     return tuple(float(v) for v in high - low)  # type: ignore[return-value]
 
 
-def missing_texture_images(path: Path | str) -> tuple[str, ...]:
-    """The texture images an OBJ's material files name that do not exist (trimesh skips them silently)."""
-    path = Path(path)
+def _named_images(path: Path) -> list[Path]:
+    """The material files an OBJ names, then the base-colour images (`map_Kd`) those name."""
     if path.suffix.lower() != ".obj":
-        return ()
-    missing = []
+        return []
+    named = []
     for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
         if not line.startswith("mtllib "):
             continue
         library = path.parent / line.split(None, 1)[1].strip()
-        if not library.is_file():
-            missing.append(str(library))
-            continue
-        for entry in library.read_text(encoding="utf-8", errors="replace").splitlines():
-            words = entry.split()
-            if words and words[0] == "map_Kd" and len(words) > 1 and not (library.parent / words[-1]).is_file():
-                missing.append(str(library.parent / words[-1]))
-    return tuple(missing)
+        named.append(library)
+        if library.is_file():
+            for entry in library.read_text(encoding="utf-8", errors="replace").splitlines():
+                words = entry.split()
+                if words and words[0] == "map_Kd" and len(words) > 1:
+                    named.append(library.parent / words[-1])
+    return named
+
+
+def missing_texture_images(path: Path | str) -> tuple[str, ...]:
+    """The texture images an OBJ's material files name that do not exist (trimesh skips them silently)."""
+    return tuple(str(p) for p in _named_images(Path(path)) if not p.is_file())
+
+
+def obj_texture_image(path: Path | str) -> Path | None:
+    """The first base-colour image an OBJ's materials name and that exists, or None."""
+    images = [p for p in _named_images(Path(path)) if p.suffix.lower() != ".mtl" and p.is_file()]
+    return images[0] if images else None
 
 
 def obj_text(vertices, faces, comments: Sequence[str] = (), uv=None, material_file: str | None = None) -> str:
@@ -173,16 +185,22 @@ def load_mesh(path: Path | str, up_axis: str = "+z"):
 
 
 def obj_objects(path: str | Path) -> int:
-    """How many objects (`o`/`g` groups) an OBJ file holds."""
+    """How many objects (`o`/`g` groups) with faces an OBJ file holds."""
+    counted, faces = 0, False
     try:
         with open(path, encoding="utf-8", errors="replace") as text:
-            return sum(1 for line in text if line.startswith(("o ", "g ")))
+            for line in text:
+                if line.startswith(("o ", "g ")):
+                    counted, faces = counted + faces, False
+                elif line.startswith("f "):
+                    faces = True
     except OSError:
         return 0
+    return counted + faces
 
 
 def one_object_obj(path: str | Path, cache: Path) -> str:
-    """A one-object copy of an OBJ of several objects, geometry only, in `cache` (by content)."""
+    """A one-object copy of an OBJ of several objects, with its UVs if it has them, in `cache` (by content)."""
     import hashlib
 
     import trimesh
@@ -192,8 +210,78 @@ def one_object_obj(path: str | Path, cache: Path) -> str:
     source = Path(path)
     target = cache / hashlib.sha256(source.read_bytes()).hexdigest()[:16] / source.name
     if not target.is_file():
-        loaded = load_mesh(source)
-        mesh = trimesh.Trimesh(loaded.vertices, loaded.faces)  # MuJoCo takes colours from the asset file
+        # As written (no merging), so each vertex keeps its own texture coordinate.
+        loaded = trimesh.load(source, force="mesh", process=False, maintain_order=True)
+        comments = (f"prsc: {source.name} as one object",)
+        uv = getattr(loaded.visual, "uv", None)
+        if uv is not None and len(uv) == len(loaded.vertices):  # textured: keep its UVs (MuJoCo reads `vt`)
+            text = obj_text(loaded.vertices, loaded.faces, comments, uv=uv, material_file=f"{source.stem}.mtl")
+        else:
+            mesh = trimesh.Trimesh(loaded.vertices, loaded.faces)  # MuJoCo takes colours from the asset file
+            text = obj_text(mesh.vertices, mesh.faces, comments)
         target.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(target, obj_text(mesh.vertices, mesh.faces, (f"prsc: {source.name} as one object",)))
+        atomic_write(target, text)
     return str(target)
+
+
+def png_image(path: Path | str, cache: Path) -> str:
+    """`path` itself when it is a PNG, else a PNG copy of it in `cache` (MuJoCo reads PNG)."""
+    import hashlib
+
+    from prsc.files import atomic_write
+
+    source = Path(path)
+    if source.suffix.lower() == ".png":
+        return str(source)
+    target = cache / hashlib.sha256(source.read_bytes()).hexdigest()[:16] / f"{source.stem}.png"
+    if not target.is_file():
+        import io
+
+        png = io.BytesIO()
+        read_image(source).save(png, format="PNG")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(target, png.getvalue())
+    return str(target)
+
+
+def read_image(path: Path | str):
+    """The image file at `path` as an RGB(A) PIL image, or a PrscError saying why not."""
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as image:
+            image.load()
+            return image.convert("RGBA" if "A" in image.getbands() else "RGB")
+    except (OSError, UnidentifiedImageError, ValueError):
+        raise PrscError(f"cannot read image {path}: not an image file PIL reads (PNG, JPEG, ...)") from None
+
+
+def mujoco_readable_meshes(spec, cache: Path) -> None:
+    """Point every OBJ of an asset's MjSpec that MuJoCo would read in part at a copy (in `cache`)
+    it reads whole, and give the geoms drawing a textured OBJ its image."""
+    import mujoco
+
+    images = {}
+    for mesh in spec.meshes:
+        image = obj_texture_image(mesh.file)
+        if image is not None:
+            images[mesh.name] = png_image(image, cache / "images")
+        # MuJoCo reads only the first object of an OBJ: pybullet's tray/tray_textured4.obj, five
+        # boxes, would be one wall of the tray in MuJoCo, and its box and convex hull that wall's.
+        # The objects of such a file may overlap, so no volume is exact: a body's mass and inertia
+        # computed from it take its convex hull, the shape it collides as.
+        several = mesh.file.lower().endswith(".obj") and obj_objects(mesh.file) > 1
+        if several or image is not None:  # textured: one UV per vertex, which MuJoCo maps right
+            mesh.file = one_object_obj(mesh.file, cache / "one-object")
+        if several:
+            mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_CONVEX
+    # MuJoCo's URDF import keeps an OBJ's UVs but not its MTL's image: a geom drawing a textured
+    # mesh gets that image as its material (coloured by the file's own colour, as pybullet does).
+    for name, image in images.items():
+        texture = spec.add_texture(name=f"{name}_image", type=mujoco.mjtTexture.mjTEXTURE_2D, file=image,
+                                   colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)
+        material = spec.add_material(name=f"{name}_image")
+        material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture.name
+    for geom in spec.geoms:
+        if geom.meshname in images and not geom.material:
+            geom.material = f"{geom.meshname}_image"

@@ -11,6 +11,7 @@ from typing import Sequence
 
 from prsc.asset_files import ArticulatedAsset, describe_asset, names_asset_file, resolve_asset_file
 from prsc.asset_links import asset_link
+from prsc.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN, joint_name, joint_property
@@ -118,6 +119,27 @@ def _no_file_joints(obj: ObjectDecl) -> None:
                             value.span)
 
 
+def _library_cabinet(obj: ObjectDecl, model: ir.Const) -> ObjectDecl:
+    """`model "cabinet"`: the library's cabinet written as a URDF from the object's width,
+    length, height and `drawers` (constants), then read as any file asset is."""
+    values = {}
+    for name in (*SIZES, "drawers"):
+        expr = obj.prop(name)
+        if not (isinstance(expr, ir.Const) and expr.type == ir.Type.SCALAR):
+            raise PrscError(f"{obj.name}: a library cabinet's {name} must be a constant number", (expr or model).span)
+        values[name] = float(expr.value)
+    drawers = int(values["drawers"]) if values["drawers"] == int(values["drawers"]) else values["drawers"]
+    try:
+        path = cabinet_urdf(values["width"], values["length"], values["height"], drawers)  # type: ignore[arg-type]
+    except PrscError as error:
+        raise PrscError(f"{obj.name}: {error.message}", (obj.prop("drawers") or model).span) from None
+    props = dict(obj.properties)
+    props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
+    for name in SIZES:  # they made the file, whose box they are: no longer written by the spec
+        props[name] = ir.Const(BUILTIN_SPAN, ir.Type.SCALAR, values[name])
+    return replace(obj, properties=tuple(props.items()))
+
+
 def _linked(obj: ObjectDecl, assets: dict[str, ArticulatedAsset], folders: Sequence[str]) -> ObjectDecl:
     """`obj` with every `X.links["NAME"]` in its specifiers read from X's file (or an error there)."""
 
@@ -154,6 +176,9 @@ def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Pro
     for obj in program.objects:
         obj = _linked(obj, assets, folders)  # a link's object comes earlier (it depends on it)
         model = obj.prop("model")
+        if isinstance(model, ir.Const) and model.value == LIBRARY_NAME:
+            obj = _library_cabinet(obj, model)
+            model = obj.prop("model")
         if isinstance(model, ir.Const) and names_asset_file(model.value):
             obj = _fitted(obj, model, folders, classes)
             assets[obj.name] = describe_asset(str(obj.prop("model").value), folders)

@@ -18,6 +18,7 @@ from prsc.ir.imports import MATH, ModuleGraph, load_module_graph
 from prsc.ir.loops import LoopStatements, bound_names, iteration_name
 from prsc.ir.asset_models import with_asset_models
 from prsc.ir.mesh_sizes import with_mesh_sizes
+from prsc.ir.textures import with_textures
 from prsc.ir.order import order_properties, order_specifiers
 from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule,
                            VariableInfo, describe, did_you_mean)
@@ -383,6 +384,7 @@ def compile_program(path: str, include_dirs: Sequence[str] = ()) -> Program:
     try:
         graph = load_module_graph(path, include_dirs)
         program = with_asset_models(with_mesh_sizes(Compiler(graph).run(), include_dirs), include_dirs)
+        program = with_textures(program, include_dirs)
         check_values(program)
         return program
     except RecursionError:

@@ -21,7 +21,7 @@ def _builtin(expr: ir.Expr | None) -> bool:
     return expr is not None and expr.span.path == BUILTIN_SPAN.path
 
 
-def _constant_strings(expr: ir.Expr) -> tuple[str, ...] | None:
+def constant_strings(expr: ir.Expr) -> tuple[str, ...] | None:
     """The file names a mesh expression can take when all are constants, else None."""
     if isinstance(expr, ir.Const) and expr.type == ir.Type.STRING:
         return (str(expr.value),)
@@ -77,7 +77,7 @@ def _sized(obj: ObjectDecl, mesh: ir.Expr, folders: Sequence[str]) -> ObjectDecl
     up_axis = _up_axis(obj, props)
     if "upAxis" in props:
         props["upAxis"] = ir.Const(props["upAxis"].span, ir.Type.STRING, up_axis)  # the JSON holds one spelling
-    names = _constant_strings(mesh)
+    names = constant_strings(mesh)
     files = [_mesh_file(obj, raw, mesh, folders) for raw in names or ()]
     unset = [i for i, prop in enumerate(SIZES) if _builtin(props.get(prop))]
     if unset and len(files) != 1:

@@ -139,3 +139,44 @@ def test_check_reports_a_bad_link_at_its_line(tmp_path, line, message):
         assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
         assert f"cab.prs:{line_number}:" in done.stderr and message in done.stderr, done.stderr
     assert not (tmp_path / "out").exists()
+
+
+LIBRARY_SPEC = """\
+from tabletop import *
+
+cab = DrawerCabinet on Vector3D(0, 0, 0), with drawers 4, with width 0.8, with joint "drawer2_slide" (0.1, 0.25)
+cube = Cube completely in cab.links["drawer2"], with color "red"
+"""
+
+
+def test_the_library_cabinet_has_its_drawers_and_holds_a_cube_in_one(tmp_path):
+    (tmp_path / "lib.prs").write_text(LIBRARY_SPEC)
+    done = _prsc("compile", str(tmp_path / "lib.prs"), "-n", "3", "--target", "json,mjcf,urdf,usd",
+                 "-o", str(tmp_path / "out"), "--settle-check")
+    assert done.returncode == 0 and "3 of 3 scenes at rest" in done.stdout, done.stdout + done.stderr
+    root = tmp_path / "out" / "lib"
+    for k in range(3):
+        scene, model, data = _scene(root, k)
+        cab = next(o for o in scene["objects"] if o["name"] == "cab")
+        assert cab["dimensions"] == pytest.approx([0.8, 0.45, 0.75], abs=1e-9)  # the box the numbers ask for
+        assert sorted(cab["joints"]) == [f"drawer{d}_slide" for d in range(4)]
+        assert [model.jnt_range[model.joint(f"cab/drawer{d}_slide").id][1] for d in range(4)] == \
+            pytest.approx([0.8 * (0.45 - 0.018 - 0.004)] * 4)
+        drawer = model.body("cab/drawer2").id
+        cube = model.body("cube").id
+        local = data.xmat[drawer].reshape(3, 3).T @ (data.xpos[cube] - data.xpos[drawer])
+        assert local[2] == pytest.approx(0.008 + 0.02, abs=1e-6)  # on the floor (8 mm) of drawer2, the cube 4 cm
+        assert readback.usd_errors(root / "usd" / f"{k:05d}.usda") == []
+        readback.urdf_validate(root / "urdf" / f"{k:05d}")
+
+
+def test_a_library_cabinet_without_drawers_is_an_error_at_its_line(tmp_path):
+    (tmp_path / "lib.prs").write_text(LIBRARY_SPEC.replace("with drawers 4", "with drawers 0"))
+    done = _prsc("check", str(tmp_path / "lib.prs"))
+    assert done.returncode == 2 and "lib.prs:3:" in done.stderr and "1 to 8 drawers" in done.stderr, done.stderr
+
+
+def test_the_example_spec_compiles_and_rests(tmp_path):
+    spec = Path(__file__).resolve().parents[2] / "specs" / "furniture" / "drawer_cubes.prs"
+    done = _prsc("compile", str(spec), "-n", "2", "--target", "json,mjcf", "-o", str(tmp_path / "out"), "--settle-check")
+    assert done.returncode == 0 and "2 of 2 scenes at rest" in done.stdout, done.stdout + done.stderr

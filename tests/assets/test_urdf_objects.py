@@ -53,6 +53,23 @@ def test_one_link_urdfs_are_free_objects_in_every_format(tmp_path):
         readback.assert_free_fall(drops, scene, where=f"scene {k}: ")
         assert readback.usd_errors(root / "usd" / f"{k:05d}.usda") == []
     _keeps_the_urdf_colour(root, "a", DATA / "random_urdfs" / "000" / "000.urdf")
+    _keeps_the_tray_texture(root)
+
+
+def _keeps_the_tray_texture(root: Path) -> None:
+    """The tray's OBJ names tray.jpg in its MTL: MuJoCo draws the tray with it, through its UVs,
+    and its collision geoms (also drawn by MuJoCo's URDF import) are hidden behind nothing."""
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+    tray = model.body("t").id
+    geoms = [g for g in range(model.ngeom) if model.body_rootid[model.geom_bodyid[g]] == tray]
+    seen = [g for g in geoms if model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0]
+    assert seen and all(model.geom_group[g] == 3 for g in geoms if g not in seen)
+    for g in seen:
+        texture = model.mat_texid[model.geom_matid[g], mujoco.mjtTextureRole.mjTEXROLE_RGB]
+        assert texture >= 0 and (model.tex_width[texture], model.tex_height[texture]) > (1, 1)
+        assert model.mesh_texcoordnum[model.geom_dataid[g]] == model.mesh_vertnum[model.geom_dataid[g]]
 
 
 def _come_to_rest(path: Path) -> None:

@@ -218,3 +218,66 @@ def test_preview_finds_the_mesh_in_the_include_folder_and_shows_its_texture(tmp_
     pixels = np.asarray(Image.open(tmp_path / "sheet.png").convert("RGB")).reshape(-1, 3).astype(int)
     yellow = (pixels[:, 0] > 150) & (pixels[:, 1] > 120) & (pixels[:, 2] < 60)  # the duck's texture, nothing else
     assert yellow.sum() > 500, yellow.sum()
+
+
+def _image(path: Path, colour: tuple[int, int, int]) -> Path:
+    """A 32 x 32 PNG of one colour with a white stripe (so it is an image, not a colour)."""
+    from PIL import Image
+
+    pixels = np.zeros((32, 32, 3), np.uint8)
+    pixels[:] = colour
+    pixels[:, :4] = 255
+    Image.fromarray(pixels).save(path)
+    return path
+
+
+def test_with_texture_puts_an_image_on_a_box_in_every_format(tmp_path):
+    import mujoco
+    from pxr import Usd, UsdGeom, UsdShade
+
+    _image(tmp_path / "red.png", (200, 0, 0))
+    _image(tmp_path / "green.png", (0, 200, 0))
+    (tmp_path / "crates.prs").write_text(
+        'from tabletop import *\nt = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75\n'
+        'crate = Cube completely on t, with texture Options(["red.png", "green.png"])\n')
+    done = _prsc("compile", str(tmp_path / "crates.prs"), "-n", "6", "--target", "json,mjcf,urdf,sdf,usd",
+                 "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    root = tmp_path / "out" / "crates"
+    drawn = set()
+    for k in range(6):
+        scene = json.loads((root / "json" / f"{k:05d}.json").read_text())
+        chosen = next(o for o in scene["objects"] if o["name"] == "crate")["properties"]["texture"]
+        drawn.add(chosen)
+        model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
+        material = int(model.geom("crate/box").matid[0])
+        texture = model.mat_texid[material, mujoco.mjtTextureRole.mjTEXROLE_RGB]
+        assert model.tex_type[texture] == mujoco.mjtTexture.mjTEXTURE_CUBE
+        texels = model.tex_data[model.tex_adr[texture]:model.tex_adr[texture] + 32 * 32 * 3].reshape(-1, 3)
+        assert (texels == 255).all(axis=1).sum() == 32 * 4  # the image's white stripe
+        channel = {"red.png": 0, "green.png": 1}[chosen]
+        assert int(np.median(texels[:, channel])) == 200
+        stage = Usd.Stage.Open(str(root / "usd" / f"{k:05d}.usda"))
+        prim = stage.GetPrimAtPath("/World/crate/box")
+        assert prim.IsA(UsdGeom.Mesh) and UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")
+        material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        image = material.ComputeSurfaceSource()[0].GetInput("diffuseColor").GetConnectedSources()[0][0].source
+        assert Path(UsdShade.Shader(image.GetPrim()).GetInput("file").Get().resolvedPath).name.startswith(chosen[:-4])
+        assert readback.usd_errors(root / "usd" / f"{k:05d}.usda") == []
+        assert f"textures/{chosen[:-4]}-" in (root / "sdf" / f"{k:05d}.sdf").read_text()  # the albedo map
+        assert f"textures/{chosen[:-4]}-" in (root / "urdf" / f"{k:05d}" / "crate.urdf").read_text()
+    assert drawn == {"red.png", "green.png"}  # drawn per scene
+
+
+@pytest.mark.parametrize("line, message", [
+    ('c = Object on t, with shape "cylinder", with texture "red.png"', "no box"),
+    ('c = Cube on t, with texture "blue.png"', "not found"),
+    ('c = Cube on t, with texture "notes.png"', "cannot read image"),
+])
+def test_check_reports_a_bad_texture_at_its_line(tmp_path, line, message):
+    _image(tmp_path / "red.png", (200, 0, 0))
+    (tmp_path / "notes.png").write_text("not an image")
+    (tmp_path / "spec.prs").write_text(f"from tabletop import *\nt = Table on Vector3D(0, 0, 0)\n{line}\n")
+    done = _prsc("check", str(tmp_path / "spec.prs"))
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "spec.prs:3:" in done.stderr and message in done.stderr, done.stderr
