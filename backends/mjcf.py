@@ -13,10 +13,13 @@ Layout (names the runner relies on):
 - a keyframe `home`: free bodies at their scene poses, robot joints at the scene's `joints`
   (the asset's home where the spec sets none), position servos holding them.
 
-Speed: the robot's MJCF fragment (bodies, assets, actuators, equalities, key) is built once
-per process and prefix by MjSpec.attach and spliced into each scene's XML; only the small
-scene part goes through MjSpec per scene. MjSpec writes numbers with 6 significant digits,
-so poses, sizes and masses are re-stamped with full precision (the scene's pose is exact).
+Speed: a scene's MJCF is one template per scene topology (which bodies, parts, robots,
+cameras; `_topology`), built once per process with MjSpec and cached, with a slot for
+every number that changes from scene to scene (`_stamps`: poses, sizes, masses, colours,
+file paths, the `home` key, the model name). A scene then costs only its numbers,
+formatted exactly (MjSpec writes 6 significant digits; the slots hold full precision).
+The robot's MJCF fragment (bodies, assets, actuators, equalities) is built once per
+process and prefix by MjSpec.attach and spliced into the template.
 """
 
 from __future__ import annotations
@@ -55,10 +58,10 @@ class RobotFragment:
     joints: tuple[str, ...]  # the robot's joints in qpos order (unprefixed)
     servo_joints: tuple[str | None, ...]  # per actuator: the joint it holds as a position servo, or None
 
-    def base_at(self, position) -> str:
-        """The root body's XML text placed at `position` in its parent body."""
+    def base_at(self, position: str) -> str:
+        """The root body's XML text with `pos="position"` (text) in its parent body."""
         head, tail = self.base.split(">", 1)
-        return f'{head} pos="{nums(position)}">{tail}'
+        return f'{head} pos="{position}">{tail}'
 
     def home(self, robot: RobotModel, joints: dict[str, float]) -> tuple[list[str], list[str]]:
         """The `home` key's qpos and ctrl of this robot at the scene's joint values: each
@@ -146,12 +149,55 @@ def _geom_size(part) -> tuple[float, ...]:
     return (0.0, 0.0, 0.0)
 
 
-def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path):
-    """The scene without robots as an MjSpec, and the exact numbers to re-stamp."""
+def _check_masses(scene: Scene, bodies: tuple[Body, ...]) -> None:
+    """MuJoCo refuses a free body without mass or inertia when it compiles: say which and why."""
+    import mujoco
+
+    for body in bodies:
+        inertial = body.inertial
+        if not body.fixed and min(inertial.mass, *inertial.diagonal) <= mujoco.mjMINVAL:
+            raise PrscError(
+                f"scene {scene.index}: object {body.obj.name!r} cannot move in MuJoCo: its mass ({inertial.mass:.3g} kg) "
+                f"and principal inertia (smallest {min(inertial.diagonal):.3g} kg m^2) must exceed "
+                f"{mujoco.mjMINVAL:g}; check its size and mass, or make it static"
+            )
+
+
+def _geom_rgba(obj, part) -> tuple[float, ...]:
+    return TEXTURED_RGBA if part.texture is not None else tuple(obj.color)
+
+
+def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dict[str, str]]:
+    """Every number (and file path) of the scene's own elements that changes from scene to
+    scene, exactly, by (tag, element name) and attribute: what fills a template's slots."""
+    exact: dict[tuple[str, str], dict[str, str]] = {}
+    for body in bodies:
+        obj, inertial = body.obj, body.inertial
+        exact[("body", obj.name)] = {"pos": nums(obj.position), "quat": nums(obj.quaternion)}
+        exact[("inertial", obj.name)] = {
+            "pos": nums(inertial.com), "quat": nums(inertial.principal),
+            "mass": num(inertial.mass), "diaginertia": nums(inertial.diagonal),
+        }
+        for part in body.parts:
+            gname = f"{obj.name}/{part.name}"
+            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(_geom_rgba(obj, part))}
+            if part.shape == "mesh":
+                exact[("mesh", gname)] = {"file": relative_path(part.mesh, folder), "scale": nums(part.size)}
+            else:
+                stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
+            if part.texture is not None:
+                exact[("texture", gname)] = {"file": relative_path(part.texture, folder)}
+            exact[("geom", gname)] = stamp
+        if body.camera is not None:
+            exact[("camera", obj.name)] = {"quat": nums(CAMERA_QUAT_NEG_Z), "fovy": num(body.camera.fovy)}
+    return exact
+
+
+def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
+    """The scene without robots as an MjSpec (its numbers are stamped exactly afterwards)."""
     import mujoco
 
     spec = mujoco.MjSpec()
-    spec.modelname = f"prsc_scene_{scene.index}"
     _options(spec)
     width = max([640] + [b.camera.width for b in bodies if b.camera])
     height = max([480] + [b.camera.height for b in bodies if b.camera])
@@ -176,44 +222,29 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
             name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="prsc_grid",
             friction=list(FRICTION), solref=list(SOLREF),
         )
-
-    exact: dict[tuple[str, str], dict[str, str]] = {}
     for body in bodies:
         obj = body.obj
         b = spec.worldbody.add_body(name=obj.name, pos=list(obj.position), quat=list(obj.quaternion))
-        exact[("body", obj.name)] = {"pos": nums(obj.position), "quat": nums(obj.quaternion)}
         if not body.fixed:
             b.add_freejoint(name=obj.name)
         # Every body gets an explicit inertial (a robot's is its near-massless mount's).
         inertial = body.inertial
-        if not body.fixed and min(inertial.mass, *inertial.diagonal) <= mujoco.mjMINVAL:
-            # MuJoCo refuses such a body when it compiles the model; say which and why.
-            raise PrscError(
-                f"scene {scene.index}: object {obj.name!r} cannot move in MuJoCo: its mass ({inertial.mass:.3g} kg) "
-                f"and principal inertia (smallest {min(inertial.diagonal):.3g} kg m^2) must exceed "
-                f"{mujoco.mjMINVAL:g}; check its size and mass, or make it static"
-            )
         b.explicitinertial = True
         b.mass = inertial.mass
         b.ipos = list(inertial.com)
         b.iquat = list(inertial.principal)
         b.inertia = list(inertial.diagonal)
-        exact[("inertial", obj.name)] = {
-            "pos": nums(inertial.com), "quat": nums(inertial.principal),
-            "mass": num(inertial.mass), "diaginertia": nums(inertial.diagonal),
-        }
         for part in body.parts:
             gname = f"{obj.name}/{part.name}"
             kwargs = dict(
                 name=gname, type=_geom_type(part.shape), pos=list(part.position), quat=list(part.quaternion),
-                rgba=list(obj.color), friction=list(FRICTION), solref=list(SOLREF),
+                rgba=list(_geom_rgba(obj, part)), friction=list(FRICTION), solref=list(SOLREF),
                 condim=CONDIM_FREE if not body.fixed else 3,
             )
             if part.shape == "mesh":
                 # Absolute here (to_xml compiles and would resolve against the cwd),
                 # relative to the output file in the written XML.
                 spec.add_mesh(name=gname, file=str(part.mesh), scale=list(part.size))
-                exact[("mesh", gname)] = {"file": relative_path(part.mesh, folder), "scale": nums(part.size)}
                 kwargs["meshname"] = gname
             else:
                 kwargs["size"] = list(_geom_size(part))
@@ -224,43 +255,49 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folde
                                  colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)  # a PNG says its own
                 material = spec.add_material(name=gname)
                 material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = gname
-                exact[("texture", gname)] = {"file": relative_path(part.texture, folder)}
-                kwargs.update(material=gname, rgba=list(TEXTURED_RGBA))  # unmodulated
+                kwargs["material"] = gname  # unmodulated: rgba white
             if not part.collides:
                 kwargs.update(contype=0, conaffinity=0)
             if not part.visible:
                 kwargs["group"] = COLLISION_GROUP
             b.add_geom(**kwargs)
-            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(kwargs["rgba"])}
-            if part.shape != "mesh":
-                stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
-            exact[("geom", gname)] = stamp
         if body.camera is not None:
             b.add_camera(
                 name=obj.name, quat=list(CAMERA_QUAT_NEG_Z), fovy=body.camera.fovy,
                 resolution=[body.camera.width, body.camera.height],
             )
-            exact[("camera", obj.name)] = {"quat": nums(CAMERA_QUAT_NEG_Z), "fovy": num(body.camera.fovy)}
-    return spec, exact
+    return spec
 
 
-def _stamp(root: ET.Element, exact: dict[tuple[str, str], dict[str, str]]) -> None:
-    """Overwrite MjSpec's rounded numbers (and absolute mesh paths) with exact ones."""
+def _slot(number: int) -> str:
+    """The mark of slot `number` in a template's text (private-use characters: never in XML prsc writes)."""
+    return f"\ue000{number}\ue000"
+
+
+def _stamp(root: ET.Element, exact: dict[tuple[str, str], dict[str, str]], slots: list[tuple]) -> None:
+    """Replace every number `exact` holds by a slot, each attribute in `exact`'s order after the
+    element's others: the text is the same whatever values MjSpec left out as defaults."""
+
+    def mark(element: ET.Element, key: tuple[str, str]) -> None:
+        for attr in exact[key]:
+            element.attrib.pop(attr, None)
+        for attr in exact[key]:
+            element.set(attr, _slot(len(slots)))
+            slots.append(("exact", key, attr))
+
     for tag in ("mesh", "texture"):
         for element in root.iter(tag):
-            attrs = exact.get((tag, element.get("name", "")))
-            if attrs is not None:
-                element.attrib.update(attrs)
+            if (tag, element.get("name", "")) in exact:
+                mark(element, (tag, element.get("name", "")))
     for body in root.iter("body"):
-        attrs = exact.get(("body", body.get("name", "")))
-        if attrs is None:
-            continue
-        body.attrib.update(attrs)
         name = body.get("name")
+        if ("body", name) not in exact:
+            continue
+        mark(body, ("body", name))
         for child in body:
             key = (child.tag, child.get("name", name) if child.tag != "inertial" else name)
             if key in exact:
-                child.attrib.update(exact[key])
+                mark(child, key)
 
 
 def _section(root: ET.Element, tag: str) -> ET.Element:
@@ -279,17 +316,96 @@ def _section(root: ET.Element, tag: str) -> ET.Element:
     return element
 
 
+@dataclass(frozen=True)
+class _Template:
+    """One scene topology's MJCF text with slots for what changes from scene to scene."""
+
+    texts: tuple[str, ...]  # the text around the slots (one more than slots)
+    slots: tuple[tuple, ...]  # ("exact", key, attr) | ("model",) | ("qpos",) | ("ctrl",) | ("mount", body name)
+
+    def fill(self, values: dict[tuple, str]) -> str:
+        """The MJCF text with every slot filled."""
+        out = [self.texts[0]]
+        for slot, text in zip(self.slots, self.texts[1:]):
+            out.append(values[slot])
+            out.append(text)
+        return "".join(out)
+
+
+_ATTRIBUTE_ESCAPES = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "\n": "&#10;",
+                                    "\r": "&#13;", "\t": "&#09;"})
+_templates: dict[tuple, _Template] = {}
+TEMPLATES_KEPT = 64  # topologies a process keeps (a spec has one, or a few with random models)
+
+
+def _topology(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path) -> tuple:
+    """Everything of a scene's MJCF that `_stamps` does not hold: scenes alike in this share a template."""
+    return (scene.ground, str(store.root), str(folder), tuple(
+        (b.obj.name, b.fixed, b.robot, None if b.camera is None else (b.camera.width, b.camera.height),
+         tuple((p.name, p.shape, p.collides, p.visible, p.texture is not None) for p in b.parts),
+         tuple(sorted(b.obj.joints)) if b.robot is not None else ())
+        for b in bodies))
+
+
+def _template(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path,
+              exact: dict[tuple[str, str], dict[str, str]]) -> _Template:
+    """The template of this scene's topology, built with MjSpec once (cached per process)."""
+    key = _topology(scene, bodies, store, folder)
+    if key in _templates:
+        return _templates[key]
+    root = ET.fromstring(_scene_spec(scene, bodies).to_xml())
+    slots: list[tuple] = []
+    root.set("model", _slot(len(slots)))
+    slots.append(("model",))
+    _stamp(root, exact, slots)
+    pieces: list[str] = []
+    holders = {b.get("name"): b for b in root.find("worldbody").findall("body")}
+    qpos = ctrl = False
+    for body in bodies:
+        qpos = qpos or not body.fixed
+        if body.robot is None:
+            continue
+        fragment = robot_fragment(body.robot, f"{body.obj.name}/", store, folder)
+        placeholder(holders[body.obj.name], pieces, fragment.base_at(_slot(len(slots))))
+        slots.append(("mount", body.obj.name))
+        for tag, text in fragment.sections.items():
+            # Robot default classes become subclasses of the scene's top-level default.
+            if text:
+                placeholder(_section(root, tag), pieces, text)
+        qpos = qpos or bool(fragment.joints)
+        ctrl = ctrl or bool(fragment.servo_joints)
+    if qpos or ctrl:
+        home = ET.SubElement(_section(root, "keyframe"), "key", name="home")
+        for name, present in (("qpos", qpos), ("ctrl", ctrl)):
+            if present:
+                home.set(name, _slot(len(slots)))
+                slots.append((name,))
+    size = root.find("size")
+    if size is not None:
+        root.remove(size)  # nkey etc. are derived by the compiler
+    # The marks survive serialisation; the slots fill in the order the text holds them.
+    texts = (serialise(root, pieces) + "\n").split("\ue000")
+    order = [slots[int(number)] for number in texts[1::2]]
+    template = _Template(tuple(texts[0::2]), tuple(order))
+    if len(_templates) >= TEMPLATES_KEPT:
+        _templates.pop(next(iter(_templates)))
+    _templates[key] = template
+    return template
+
+
 def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
     """The MJCF text of a scene to be written at `path` (mesh paths are relative to it)."""
     folder = Path(path).parent
     bodies = resolve_bodies(scene, store)
-    spec, exact = _scene_spec(scene, bodies, store, folder)
-    root = ET.fromstring(spec.to_xml())
-    _stamp(root, exact)
+    _check_masses(scene, bodies)
+    exact = _stamps(bodies, folder)
+    template = _template(scene, bodies, store, folder, exact)
+    values: dict[tuple, str] = {("model",): f"prsc_scene_{scene.index}"}
+    for key, attrs in exact.items():
+        for attr, value in attrs.items():
+            values[("exact", key, attr)] = value.translate(_ATTRIBUTE_ESCAPES)
     qpos: list[str] = []
     ctrl: list[str] = []
-    pieces: list[str] = []
-    holders = {b.get("name"): b for b in root.find("worldbody").findall("body")}
     for body in bodies:
         obj = body.obj
         if not body.fixed:
@@ -297,24 +413,12 @@ def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
         if body.robot is None:
             continue
         fragment = robot_fragment(body.robot, f"{obj.name}/", store, folder)
-        placeholder(holders[obj.name], pieces, fragment.base_at(body.mount_position))
-        for tag, text in fragment.sections.items():
-            # Robot default classes become subclasses of the scene's top-level default.
-            if text:
-                placeholder(_section(root, tag), pieces, text)
+        values[("mount", obj.name)] = nums(body.mount_position)
         robot_qpos, robot_ctrl = fragment.home(body.robot, obj.joints)
         qpos += robot_qpos
         ctrl += robot_ctrl
-    if qpos or ctrl:
-        key = ET.SubElement(_section(root, "keyframe"), "key", name="home")
-        if qpos:
-            key.set("qpos", " ".join(qpos))
-        if ctrl:
-            key.set("ctrl", " ".join(ctrl))
-    size = root.find("size")
-    if size is not None:
-        root.remove(size)  # nkey etc. are derived by the compiler
-    return serialise(root, pieces) + "\n"
+    values[("qpos",)], values[("ctrl",)] = " ".join(qpos), " ".join(ctrl)
+    return template.fill(values)
 
 
 def render(scene: Scene, path: Path, store: AssetStore) -> bytes:
