@@ -266,8 +266,12 @@ class SequentialSampler:
                                 [], checks, run):
                     return True
             return False
-        # The exact method never draws inside an excluded cell: it decomposes them away below.
-        rejection_draws = 0 if excluded and method == "exact" else self.limits.point_draws
+        # The exact method never draws inside an excluded cell (it decomposes them away below),
+        # and seeks by rejection only as long as that is cheaper than the decomposition.
+        if method != "exact":
+            rejection_draws = self.limits.point_draws
+        else:
+            rejection_draws = 0 if excluded else self.limits.exact_point_draws
         for _ in range(rejection_draws):
             run.draws += 1
             if run.draws > self.limits.draw_budget:

@@ -9,7 +9,7 @@ scenes per spec), checked against fresh draws; each law under test draws N scene
 
 Power: with N = 500 against 4,000, a per-coordinate KS test at p < 0.01 detects a shift
 of the CDF by 0.08; the sequential law, at the same N, gives p = 2e-21 (cups) and 3e-4
-(tray) (the companion test), the joint law p = 0.58 and 0.07 (seeds below).
+(tray) (the companion test), the joint law p = 0.34 and 0.30 (seeds below).
 """
 
 from __future__ import annotations
