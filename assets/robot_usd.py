@@ -2,8 +2,9 @@
 
 The asset's default prim `/<robot>` carries ArticulationRootAPI; every link is a flat child
 Xform (no nested rigid bodies) with RigidBodyAPI and MassAPI, placed at the robot's home
-posture, with its visual meshes converted by trimesh to UsdGeom.Mesh and its collision
-meshes as convex-hull colliders (purpose "guide", not rendered). Joints live under
+posture, with its visual meshes converted by trimesh to UsdGeom.Mesh (boxes, cylinders and
+spheres as UsdGeom Cube, Cylinder and Sphere) and its collision geometry as colliders
+(meshes as convex hulls; purpose "guide", not rendered). Joints live under
 `/<robot>/joints`: revolute joints with limits in degrees and prismatic joints in metres,
 each with a drive holding the home posture; `root_joint` is a fixed joint from the world
 to the root link, whose world-side frame (`physics:localPos0/localRot0`) a scene sets to
@@ -23,7 +24,7 @@ from prsc.assets.urdf_tree import Joint, RobotTree, read_urdf
 from prsc.files import atomic_path
 from prsc.geometry.rotations import matrix_to_quat
 
-RECIPE_VERSION = "1"
+RECIPE_VERSION = "2"  # 2: URDF boxes, cylinders and spheres converted too
 
 # Drive gains per unit of joint motion: angular drives in USD are per degree.
 _ANGULAR_STIFFNESS = 1000.0 * math.pi / 180  # N m / deg
@@ -38,19 +39,26 @@ def _build_dir() -> Path:
     return build_dir()
 
 
-def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float]) -> Path:
+def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float], drives: bool = True) -> Path:
     """Path of the robot's USD asset (default prim `/<robot>`, a valid prim name), posed at
-    `home` (joint name -> value), converting it on first use (keyed by URDF, home and recipe)."""
+    `home` (joint name -> value), converting it on first use (keyed by URDF, home, drives and
+    recipe). Without `drives` (furniture) its joints are free to move."""
     digest = hashlib.sha256()
     digest.update(RECIPE_VERSION.encode())
     digest.update(Path(urdf_path).read_bytes())
     digest.update(repr(sorted(home.items())).encode())
+    digest.update(b"drives" if drives else b"free")
     target = _build_dir() / f"{robot}-usd-{digest.hexdigest()[:12]}" / f"{robot}.usdc"
     if not target.is_file():
         target.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(target) as tmp:
-            _write_robot_usd(robot, read_urdf(urdf_path), home, tmp)
+            _write_robot_usd(robot, read_urdf(urdf_path), home, tmp, drives)
     return target
+
+
+def drive_attribute(joint: Joint) -> str:
+    """The attribute of a joint's drive target (`drive:angular:...` in degrees, `linear` in m)."""
+    return f"drive:{'linear' if joint.type == 'prismatic' else 'angular'}:physics:targetPosition"
 
 
 def _quatd(matrix: np.ndarray):
@@ -98,6 +106,42 @@ def _mesh_prim(stage, path: str, filename: str, origin: np.ndarray, scale, rgba=
     return prim
 
 
+def _primitive_prim(stage, path: str, geometry, rgba=None):
+    """A UsdGeom Cube (scaled), Cylinder (about z, as URDF's) or Sphere for a URDF primitive."""
+    from pxr import Gf, UsdGeom
+
+    if geometry.kind == "box":
+        prim = UsdGeom.Cube.Define(stage, path)
+        prim.CreateSizeAttr(1.0)
+        prim.CreateExtentAttr([Gf.Vec3f(-0.5, -0.5, -0.5), Gf.Vec3f(0.5, 0.5, 0.5)])
+    elif geometry.kind == "cylinder":
+        prim = UsdGeom.Cylinder.Define(stage, path)
+        radius, length = (float(v) for v in geometry.size)
+        prim.CreateRadiusAttr(radius)
+        prim.CreateHeightAttr(length)
+        prim.CreateAxisAttr(UsdGeom.Tokens.z)
+        prim.CreateExtentAttr([Gf.Vec3f(-radius, -radius, -length / 2), Gf.Vec3f(radius, radius, length / 2)])
+    else:
+        prim = UsdGeom.Sphere.Define(stage, path)
+        radius = float(geometry.size[0])
+        prim.CreateRadiusAttr(radius)
+        prim.CreateExtentAttr([Gf.Vec3f(-radius, -radius, -radius), Gf.Vec3f(radius, radius, radius)])
+    set_pose(prim, geometry.origin)
+    if geometry.kind == "box":
+        prim.AddScaleOp().Set(Gf.Vec3f(*(float(v) for v in geometry.size)))
+    if rgba is not None:
+        prim.CreateDisplayColorAttr([Gf.Vec3f(*(float(c) for c in rgba[:3]))])
+        prim.CreateDisplayOpacityAttr([float(rgba[3])])
+    return prim
+
+
+def _geometry_prim(stage, path: str, geometry, rgba=None):
+    """The prim of a URDF visual or collision element: a converted mesh or a primitive."""
+    if geometry.kind == "mesh":
+        return _mesh_prim(stage, path, geometry.filename, geometry.origin, geometry.scale, rgba)
+    return _primitive_prim(stage, path, geometry, rgba)
+
+
 def apply_mass(prim, mass: float, com, tensor: np.ndarray) -> None:
     """MassAPI with mass, centre of mass, principal moments and principal axes."""
     from pxr import Gf, UsdPhysics
@@ -130,7 +174,7 @@ def _axis_frame(axis: np.ndarray) -> np.ndarray:
     return np.eye(3) + s * k + (1 - c) * (k @ k)
 
 
-def _joint(stage, root: str, joint: Joint, home: dict[str, float]) -> None:
+def _joint(stage, root: str, joint: Joint, home: dict[str, float], drives: bool) -> None:
     from pxr import Gf, Sdf, UsdPhysics
 
     path = f"{root}/joints/{joint.name}"
@@ -157,7 +201,7 @@ def _joint(stage, root: str, joint: Joint, home: dict[str, float]) -> None:
     usd.CreateLocalRot0Attr(_quatf(joint.origin[:3, :3] @ frame))
     usd.CreateLocalPos1Attr(Gf.Vec3f(0.0, 0.0, 0.0))
     usd.CreateLocalRot1Attr(_quatf(frame))
-    if joint.type in ("revolute", "continuous", "prismatic"):
+    if drives and joint.type in ("revolute", "continuous", "prismatic"):
         angular = joint.type != "prismatic"
         drive = UsdPhysics.DriveAPI.Apply(usd.GetPrim(), "angular" if angular else "linear")
         drive.CreateTypeAttr("force")
@@ -169,7 +213,7 @@ def _joint(stage, root: str, joint: Joint, home: dict[str, float]) -> None:
             drive.CreateMaxForceAttr(joint.effort)
 
 
-def _write_robot_usd(robot: str, tree: RobotTree, home: dict[str, float], path: Path) -> None:
+def _write_robot_usd(robot: str, tree: RobotTree, home: dict[str, float], path: Path, drives: bool = True) -> None:
     """Convert a parsed URDF into a USD articulation file at `path`."""
     from pxr import Sdf, Usd, UsdGeom, UsdPhysics
 
@@ -189,18 +233,16 @@ def _write_robot_usd(robot: str, tree: RobotTree, home: dict[str, float], path: 
         rot = link.inertial_origin[:3, :3]
         apply_mass(xform.GetPrim(), link.mass, link.inertial_origin[:3, 3], rot @ link.inertia @ rot.T)
         for k, geometry in enumerate(link.visuals):
-            if geometry.kind == "mesh":
-                _mesh_prim(stage, f"{root}/{link.name}/visual_{k}", geometry.filename, geometry.origin, geometry.scale, geometry.rgba)
+            _geometry_prim(stage, f"{root}/{link.name}/visual_{k}", geometry, geometry.rgba)
         for k, geometry in enumerate(link.collisions):
-            if geometry.kind != "mesh":
-                continue
-            mesh = _mesh_prim(stage, f"{root}/{link.name}/collision_{k}", geometry.filename, geometry.origin, geometry.scale)
-            mesh.CreatePurposeAttr(UsdGeom.Tokens.guide)
-            UsdPhysics.CollisionAPI.Apply(mesh.GetPrim())
-            UsdPhysics.MeshCollisionAPI.Apply(mesh.GetPrim()).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
+            collider = _geometry_prim(stage, f"{root}/{link.name}/collision_{k}", geometry)
+            collider.CreatePurposeAttr(UsdGeom.Tokens.guide)
+            UsdPhysics.CollisionAPI.Apply(collider.GetPrim())
+            if geometry.kind == "mesh":
+                UsdPhysics.MeshCollisionAPI.Apply(collider.GetPrim()).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
     UsdGeom.Scope.Define(stage, f"{root}/joints")
     for joint in tree.joints:
-        _joint(stage, root, joint, home)
+        _joint(stage, root, joint, home, drives)
     fixed = UsdPhysics.FixedJoint.Define(stage, f"{root}/joints/root_joint")
     fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{tree.root}")])
     stage.GetRootLayer().Save()

@@ -129,7 +129,7 @@ class AssetStore:
 def _robot_usd_source(robot: RobotModel) -> Path:
     from prsc.assets.robot_usd import robot_usd_cached
 
-    return robot_usd_cached(robot.prim_name, robot.urdf, robot.home())
+    return robot_usd_cached(robot.prim_name, robot.urdf, robot.home(), drives=not robot.passive)
 
 
 def texture_of(normalised: Path | str) -> Path | None:

@@ -14,6 +14,7 @@ the world-side frame of the asset's `root_joint` to that mount.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -260,6 +261,44 @@ def _robot_reference(layer, body: Body, asset: Path, folder: Path) -> None:
     rot.default = Gf.Quatf(float(w), Gf.Vec3f(float(x), float(y), float(z)))
     if not body.fixed:  # a free-floating robot (`static False`): no weld to the world
         Sdf.AttributeSpec(joint, "physics:jointEnabled", Sdf.ValueTypeNames.Bool).default = False
+    _joint_values(layer, path, body)
+
+
+def _joint_values(layer, path: str, body: Body) -> None:
+    """Over the asset (posed at its home): every link where the scene's joint values put it,
+    and each drive's target there (a drawer pulled out, an arm in its scene posture)."""
+    from pxr import Gf, Sdf
+
+    from prsc.assets.robot_usd import drive_attribute
+    from prsc.geometry.rotations import matrix_to_quat
+
+    robot = body.robot
+    values = robot.home(dict(body.obj.joints))
+    if values == robot.home():
+        return
+    tree = _robot_tree(robot.urdf)
+    for name, pose in tree.link_poses(values).items():
+        link = Sdf.CreatePrimInLayer(layer, f"{path}/{name}")
+        link.specifier = Sdf.SpecifierOver
+        Sdf.AttributeSpec(link, "xformOp:translate", Sdf.ValueTypeNames.Double3).default = \
+            Gf.Vec3d(*(float(v) for v in pose[:3, 3]))
+        w, x, y, z = (float(v) for v in matrix_to_quat(pose[:3, :3]))
+        Sdf.AttributeSpec(link, "xformOp:orient", Sdf.ValueTypeNames.Quatd).default = Gf.Quatd(w, Gf.Vec3d(x, y, z))
+    if robot.passive:
+        return
+    for joint in tree.joints:
+        if joint.type in ("revolute", "continuous", "prismatic") and joint.name in values:
+            spec = Sdf.CreatePrimInLayer(layer, f"{path}/joints/{joint.name}")
+            spec.specifier = Sdf.SpecifierOver
+            value = values[joint.name] if joint.type == "prismatic" else math.degrees(values[joint.name])
+            Sdf.AttributeSpec(spec, drive_attribute(joint), Sdf.ValueTypeNames.Float).default = float(value)
+
+
+@lru_cache(maxsize=16)
+def _robot_tree(urdf: Path):
+    from prsc.assets.urdf_tree import read_urdf
+
+    return read_urdf(urdf)
 
 
 def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:

@@ -116,8 +116,20 @@ def test_a_gentle_pull_moves_the_drawer_and_the_cube_rides_along(compiled):
 
 
 def test_every_format_carries_the_cabinet(compiled):
+    from pxr import Usd, UsdGeom, UsdPhysics
+
     for k in range(2):
         assert readback.usd_errors(compiled / "usd" / f"{k:05d}.usda") == []
+        # USD: the drawer where the scene's joint value puts it (as in MuJoCo), drawn with the
+        # URDF's boxes, its joint free (no drive holds furniture).
+        _, model, data = _scene(compiled, k)
+        stage = Usd.Stage.Open(str(compiled / "usd" / f"{k:05d}.usda"))
+        drawer = next(p for p in stage.Traverse() if p.GetName() == "drawer")
+        placed = UsdGeom.XformCache().GetLocalToWorldTransform(drawer).ExtractTranslation()
+        assert np.allclose(placed, data.xpos[model.body("cab/drawer").id], atol=1e-6)
+        assert sum(1 for p in Usd.PrimRange(drawer) if p.IsA(UsdGeom.Cube)) == 10  # 5 boxes, seen and colliding
+        slide = next(p for p in stage.Traverse() if p.GetName() == "drawer_slide")
+        assert slide.IsA(UsdPhysics.PrismaticJoint) and not slide.HasAPI(UsdPhysics.DriveAPI)
         readback.urdf_validate(compiled / "urdf" / f"{k:05d}")
         poses = readback.sdf_poses(compiled / "sdf" / f"{k:05d}.sdf")
         assert {"cab", "cube", "box"} <= set(poses)

@@ -167,6 +167,13 @@ def test_urdf_bundle_sdf_and_usd_carry_every_joint(arm_output):
     revolute = [p for p in stage.Traverse() if p.IsA(UsdPhysics.RevoluteJoint) and "/arm/" in str(p.GetPath())]
     assert len(revolute) == joints
     assert any(p.HasAPI(UsdPhysics.ArticulationRootAPI) and "/arm/" in str(p.GetPath()) for p in stage.Traverse())
+    # Each drive holds its joint at the scene's value (degrees), not at the file's home.
+    values = _arm(scenes[0])["joints"]
+    driven = [p for p in revolute if p.GetName() in values and p.HasAPI(UsdPhysics.DriveAPI, "angular")]
+    assert len(driven) == joints
+    for prim in driven:
+        target = UsdPhysics.DriveAPI(prim, "angular").GetTargetPositionAttr().Get()
+        assert target == pytest.approx(np.degrees(values[prim.GetName()]), abs=1e-4)
 
 
 def _top_down_ik(model, data, tool, is_site: bool, qadr: np.ndarray, target: np.ndarray, start: np.ndarray):
