@@ -6,7 +6,7 @@ posture, with its visual meshes converted by trimesh to UsdGeom.Mesh (boxes, cyl
 spheres as UsdGeom Cube, Cylinder and Sphere) and its collision geometry as colliders
 (meshes as convex hulls; purpose "guide", not rendered). Joints live under
 `/<robot>/joints`: revolute joints with limits in degrees and prismatic joints in metres,
-each with a drive holding the home posture; `root_joint` is a fixed joint from the world
+each with a drive holding the home posture (furniture: none); `root_joint` is a fixed joint from the world
 to the root link, whose world-side frame (`physics:localPos0/localRot0`) a scene sets to
 where it mounts the robot. Mimic joints (the Panda's second finger) have no UsdPhysics
 schema and are left as independent joints.
