@@ -97,6 +97,13 @@ def _mesh_prim(stage, path: str, filename: str, origin: np.ndarray, scale, rgba=
     prim.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
     low, high = vertices.min(axis=0), vertices.max(axis=0)
     prim.CreateExtentAttr(Vt.Vec3fArray([Gf.Vec3f(*low.tolist()), Gf.Vec3f(*high.tolist())]))
+    return _placed(prim, origin, scale, rgba)
+
+
+def _placed(prim, origin: np.ndarray, scale, rgba):
+    """`prim` at `origin` in its link, scaled (when not 1) and coloured (when given)."""
+    from pxr import Gf
+
     set_pose(prim, origin)
     if tuple(scale) != (1.0, 1.0, 1.0):
         prim.AddScaleOp().Set(Gf.Vec3f(*(float(s) for s in scale)))
@@ -126,13 +133,7 @@ def _primitive_prim(stage, path: str, geometry, rgba=None):
         radius = float(geometry.size[0])
         prim.CreateRadiusAttr(radius)
         prim.CreateExtentAttr([Gf.Vec3f(-radius, -radius, -radius), Gf.Vec3f(radius, radius, radius)])
-    set_pose(prim, geometry.origin)
-    if geometry.kind == "box":
-        prim.AddScaleOp().Set(Gf.Vec3f(*(float(v) for v in geometry.size)))
-    if rgba is not None:
-        prim.CreateDisplayColorAttr([Gf.Vec3f(*(float(c) for c in rgba[:3]))])
-        prim.CreateDisplayOpacityAttr([float(rgba[3])])
-    return prim
+    return _placed(prim, geometry.origin, geometry.size if geometry.kind == "box" else (1.0, 1.0, 1.0), rgba)
 
 
 def _geometry_prim(stage, path: str, geometry, rgba=None):
