@@ -84,9 +84,8 @@ def _local_init(fn: Callable[[Any, Any], Any], shared: Any, parent: int) -> None
     _worker_fn, _worker_shared = fn, shared
 
 
-def _local_call(numbered: tuple[int, Any]) -> tuple[int, Any]:
-    number, item = numbered
-    return number, _worker_fn(_worker_shared, item)
+def _local_call_chunk(numbered: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
+    return [(number, _worker_fn(_worker_shared, item)) for number, item in numbered]
 
 
 @dataclass(frozen=True)
@@ -112,26 +111,87 @@ class LocalExecutor:
             return results
         method = self.start if self.start in multiprocessing.get_all_start_methods() else "spawn"
         context = multiprocessing.get_context(method)
-        pool = context.Pool(min(self.jobs, len(batch)), initializer=_local_init, initargs=(fn, shared, os.getpid()),
-                            )
-        try:
-            while batch:
-                # Pool.imap consumes its whole input at once: hand it bounded batches instead.
-                start = len(results)
-                results.extend([None] * len(batch))
-                chunk = 1 if method == "spawn" else max(1, min(16, len(batch) // (self.jobs * 8)))
-                for number, result in pool.imap_unordered(_local_call, enumerate(batch, start), chunksize=chunk):
-                    results[number] = result
-                    if on_result is not None:
-                        on_result(result)
-                batch = list(itertools.islice(pending, self.jobs * BATCH_PER_WORKER))
-            pool.close()
-        except BaseException:
-            pool.terminate()
-            raise
-        finally:
-            pool.join()
+        with _DeferredSignals() as signals:
+            pool = context.Pool(min(self.jobs, len(batch)), initializer=_local_init,
+                                initargs=(fn, shared, os.getpid()))
+            try:
+                while batch:
+                    # Pool.imap consumes its whole input at once: hand it bounded batches instead.
+                    start = len(results)
+                    results.extend([None] * len(batch))
+                    chunk = 1 if method == "spawn" else max(1, min(16, len(batch) // (self.jobs * 8)))
+                    numbered = list(enumerate(batch, start))
+                    # Chunks as items (chunksize 1): only then does imap's iterator take a timeout.
+                    chunks = [numbered[i:i + chunk] for i in range(0, len(numbered), chunk)]
+                    answers = pool.imap_unordered(_local_call_chunk, chunks, chunksize=1)
+                    while True:
+                        signals.check()
+                        try:
+                            finished = answers.next(timeout=SIGNAL_POLL)
+                        except multiprocessing.TimeoutError:
+                            continue
+                        except StopIteration:
+                            break
+                        for number, result in finished:
+                            results[number] = result
+                            if on_result is not None:
+                                on_result(result)
+                    batch = list(itertools.islice(pending, self.jobs * BATCH_PER_WORKER))
+                pool.close()
+            except BaseException:
+                pool.terminate()
+                raise
+            finally:
+                pool.join()
         return results
+
+
+SIGNAL_POLL = 0.1  # s: how soon a deferred Ctrl-C or SIGTERM stops a local pool
+
+
+class _DeferredSignals:
+    """While a process pool runs, Ctrl-C and SIGTERM are noted, then acted on between results.
+
+    Their handlers raise (KeyboardInterrupt, the CLI's Terminated); raised at an arbitrary
+    point of multiprocessing's code, between a lock's acquire and the block that releases it
+    (bpo-29988), the exception left a lock held and `pool.terminate()` waited forever for it
+    (seen once: a compile that never ended after SIGTERM). Here the previous handler runs at
+    a point where no lock is held. Off the main thread signals cannot be set: nothing changes."""
+
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+    def __init__(self) -> None:
+        self.previous: dict[int, Any] = {}
+        self.pending: list[int] = []
+
+    def __enter__(self) -> "_DeferredSignals":
+        try:
+            for signum in self.SIGNALS:
+                self.previous[signum] = signal.signal(signum, lambda number, frame: self.pending.append(number))
+        except ValueError:  # not the main thread
+            self.__exit__()
+        return self
+
+    def __exit__(self, kind: Any = None, *exc: Any) -> None:
+        previous, self.previous = self.previous, {}
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        if kind is None:  # a signal that came with the last result still counts
+            self._act(previous)
+
+    def check(self) -> None:
+        """Run the handler a noted signal would have run (it raises), where it is safe."""
+        self._act(self.previous)
+
+    def _act(self, handlers: dict[int, Any]) -> None:
+        if not (self.pending and handlers):
+            return
+        signum = self.pending.pop(0)
+        handler = handlers[signum]
+        if callable(handler):
+            handler(signum, None)
+        elif handler == signal.SIG_DFL:
+            os.kill(os.getpid(), signum)  # its handler is back in place: the default action
 
 
 # ------------------------------------------------------------------ Ray
