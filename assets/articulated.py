@@ -10,12 +10,12 @@ URDF written from its compiled model (prsc/assets/mjcf_urdf.py).
 from __future__ import annotations
 
 import re
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
+from prsc.assets.urdf_tree import RobotTree, read_urdf
 from prsc.asset_files import ArticulatedAsset, AssetJoint, asset_spec, describe_asset, names_asset_file, resolve_asset_file
 from prsc.errors import PrscError
 from prsc.files import atomic_write
@@ -177,9 +177,15 @@ def _urdf_path(model: RobotModel) -> Path:
     return target
 
 
+@lru_cache(maxsize=16)
+def robot_tree(model: RobotModel) -> RobotTree:
+    """The asset's URDF (a file's own, or the one written from its MJCF) parsed (cached)."""
+    return read_urdf(model.urdf)
+
+
 @lru_cache(maxsize=32)
 def _link_names(model: RobotModel) -> frozenset[str]:
-    return frozenset(l.get("name") for l in ET.parse(model.urdf).getroot().findall("link"))
+    return frozenset(link.name for link in robot_tree(model).links)
 
 
 def check_robot_name(model: RobotModel, object_name: str) -> None:

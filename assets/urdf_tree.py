@@ -8,13 +8,13 @@ with axes, limits and mimics.
 
 from __future__ import annotations
 
-import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from prsc.geometry.kinematics import axis_angle
 from prsc.geometry.rotations import rpy_to_matrix
 
 
@@ -93,9 +93,7 @@ def joint_motion(joint: Joint, q: float) -> np.ndarray:
     """4x4 motion of a joint at position q, in its own frame."""
     out = np.eye(4)
     if joint.type in ("revolute", "continuous"):
-        axis = joint.axis / np.linalg.norm(joint.axis)
-        k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-        out[:3, :3] = np.eye(3) + math.sin(q) * k + (1 - math.cos(q)) * (k @ k)
+        out[:3, :3] = axis_angle(joint.axis / np.linalg.norm(joint.axis), q)
     elif joint.type == "prismatic":
         out[:3, 3] = joint.axis / np.linalg.norm(joint.axis) * q
     return out

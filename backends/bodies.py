@@ -87,11 +87,12 @@ def _warn_unknown_model(obj: SceneObject) -> None:
     )
 
 
-def resolve_mesh_source(obj: SceneObject, scene: Scene, store: AssetStore) -> Path:
-    """The mesh file of a mesh-shaped object: in the spec's folder or the store's --include folders."""
+def resolve_mesh_source(obj: SceneObject, scene: Scene, store: AssetStore, prop: str = "mesh") -> Path:
+    """The file an object's `prop` (its mesh, its texture) names: in the spec's folder or the
+    store's --include folders."""
     folders = mesh_folders(scene.spec, store.mesh_dirs)
     try:
-        return resolve_mesh(str(obj.properties["mesh"]), folders, store.meshes_anywhere)
+        return resolve_mesh(str(obj.properties[prop]), folders, store.meshes_anywhere, what=prop)
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
 
@@ -166,9 +167,8 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
 
 def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
     """`with texture`: the image on every face of the object's visible boxes."""
+    source = resolve_mesh_source(obj, scene, store, "texture")
     try:
-        source = resolve_mesh(str(obj.properties["texture"]), mesh_folders(scene.spec, store.mesh_dirs),
-                              store.meshes_anywhere)
         image = str(store.texture_image(source))
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None

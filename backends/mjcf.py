@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+from prsc.asset_files import COLLISION_GROUP  # collision-only geoms: hidden in MuJoCo's viewer and renderer
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
@@ -40,7 +41,6 @@ from prsc.errors import PrscError
 
 FRICTION = (1.0, 0.005, 0.0001)  # sliding, torsional, rolling
 SOLREF = (0.01, 1.0)  # stiffer than the default 0.02 so resting objects sink < 1 mm
-COLLISION_GROUP = 3  # collision-only geoms: MuJoCo's viewer and renderer hide group 3 by default
 TEXTURED_RGBA = (1.0, 1.0, 1.0, 1.0)  # a textured part shows its image's own colours
 CONDIM_FREE = 4  # torsional friction: a held or resting object does not spin in place
 SECTION_ORDER = (

@@ -24,14 +24,14 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.assets.urdf_tree import Geometry, RobotTree, read_urdf
+from prsc.assets.urdf_tree import Geometry
 from prsc.backends.bodies import Body, resolve_bodies
 from prsc.backends.gazebo_camera import camera_sensor_body
 from prsc.backends.inertia import Inertial
 from prsc.backends.mjcf import FRICTION
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
-from prsc.assets.articulated import RobotModel, check_robot_name
+from prsc.assets.articulated import RobotModel, check_robot_name, robot_tree
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
@@ -123,11 +123,6 @@ def _parts_model(world: ET.Element, body: Body, folder: Path) -> None:
         ET.SubElement(sensor, "update_rate").text = "30"
 
 
-@lru_cache(maxsize=8)
-def _robot_tree(robot: RobotModel) -> RobotTree:
-    return read_urdf(robot.urdf)
-
-
 def _robot_geometry(parent: ET.Element, geometry: Geometry, robot: RobotModel, store: AssetStore, folder: Path) -> None:
     element = ET.SubElement(parent, "geometry")
     if geometry.kind == "mesh":
@@ -154,7 +149,7 @@ def _robot_links_text(robot: RobotModel, store_root: str, folder: str, mount: tu
     is the object's and the mount offset goes into every link pose.)
     """
     store = AssetStore(store_root)
-    tree = _robot_tree(robot)
+    tree = robot_tree(robot)
     holder = ET.Element("model")
     base = np.eye(4)
     base[:3, :3] = rot_z(robot.base_yaw)
@@ -202,7 +197,7 @@ def _robot_model(world: ET.Element, body: Body, store: AssetStore, folder: Path,
     object, is the mount (welded to the robot's base, and to the world when fixed)."""
     obj = body.obj
     assert body.robot is not None
-    tree = _robot_tree(body.robot)
+    tree = robot_tree(body.robot)
     check_robot_name(body.robot, obj.name)
     model = ET.SubElement(world, "model", name=obj.name)
     _pose(model, obj.position, obj.quaternion)

@@ -102,8 +102,11 @@ class AssetStore:
 
         from prsc.mesh_paths import read_image
 
-        data = Path(source).read_bytes()
-        target = self.root / "textures" / f"{Path(source).stem}-{_sha12(data)}.png"
+        try:
+            stat = os.stat(source)
+        except OSError as error:
+            raise PrscError(f"cannot read image {source}: {error.strerror or error}") from None
+        target = self.root / "textures" / _image_name(str(source), stat.st_mtime_ns, stat.st_size)
         if not target.is_file():
             png = io.BytesIO()
             read_image(source).save(png, format="PNG")
@@ -130,6 +133,12 @@ def _robot_usd_source(robot: RobotModel) -> Path:
     from prsc.assets.robot_usd import robot_usd_cached
 
     return robot_usd_cached(robot.prim_name, robot.urdf, robot.home(), drives=not robot.passive)
+
+
+@lru_cache(maxsize=256)
+def _image_name(source: str, mtime_ns: int, size: int) -> str:
+    """`<stem>-<hash of the file's bytes>.png` (cached while the file is unchanged: every scene asks)."""
+    return f"{Path(source).stem}-{_sha12(Path(source).read_bytes())}.png"
 
 
 def texture_of(normalised: Path | str) -> Path | None:

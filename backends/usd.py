@@ -14,11 +14,11 @@ the world-side frame of the asset's `root_joint` to that mount.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from prsc.assets.articulated import robot_tree
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
 from prsc.backends.scene import Scene
 from prsc.backends.store import AssetStore, relative_path
@@ -276,7 +276,7 @@ def _joint_values(layer, path: str, body: Body) -> None:
     values = robot.home(dict(body.obj.joints))
     if values == robot.home():
         return
-    tree = _robot_tree(robot.urdf)
+    tree = robot_tree(robot)
     for name, pose in tree.link_poses(values).items():
         link = Sdf.CreatePrimInLayer(layer, f"{path}/{name}")
         link.specifier = Sdf.SpecifierOver
@@ -292,13 +292,6 @@ def _joint_values(layer, path: str, body: Body) -> None:
             spec.specifier = Sdf.SpecifierOver
             value = values[joint.name] if joint.type == "prismatic" else math.degrees(values[joint.name])
             Sdf.AttributeSpec(spec, drive_attribute(joint), Sdf.ValueTypeNames.Float).default = float(value)
-
-
-@lru_cache(maxsize=16)
-def _robot_tree(urdf: Path):
-    from prsc.assets.urdf_tree import read_urdf
-
-    return read_urdf(urdf)
 
 
 def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:

@@ -111,10 +111,7 @@ def resolve_asset_file(raw: str, folders: Sequence[str]) -> Path:
     """The asset file `raw` names, looked up like meshes, or a PrscError saying where it looked."""
     from prsc.mesh_paths import resolve_mesh
 
-    try:
-        return resolve_mesh(raw, folders, anywhere=True)
-    except PrscError as error:
-        raise PrscError(error.message.replace("mesh file", "asset file").replace("mesh path", "asset path")) from None
+    return resolve_mesh(raw, folders, anywhere=True, what="asset")
 
 
 def _package_path(uri: str, urdf: Path, folders: Sequence[str]) -> str:

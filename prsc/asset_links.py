@@ -1,6 +1,6 @@
 """Links of the user's articulated assets (docs/assets.md, "Links"): the chain of bodies from
-the world to a link, as numbers read once from the file, with forward kinematics in numpy, and
-the link's collision geometry as boxes in its own frame. `X.links["NAME"]` carries one
+the world to a link, as numbers read once from the file (prsc/geometry/kinematics.py poses
+it), and the link's collision geometry as boxes in its own frame. `X.links["NAME"]` carries one
 (prsc/ir/asset_models.py) and the constraint stage places it at a scene's joint values.
 
 Foundation module: imported by every layer, it imports mujoco only inside functions.
@@ -8,7 +8,6 @@ Foundation module: imported by every layer, it imports mujoco only inside functi
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -49,38 +48,6 @@ class AssetLink:
     root_position: tuple[float, float, float]  # the root body's origin in the file's world
     boxes: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]  # (low, high) each
 
-    def pose(self, joints: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
-        """(position, rotation matrix) of the link relative to the root body's origin (file axes),
-        at the joint values `joints` (a joint not given stands at 0)."""
-        position, rotation = np.zeros(3), np.eye(3)
-        for step in self.chain:
-            position = position + rotation @ np.asarray(step.position)
-            rotation = rotation @ _quat_matrix(step.quaternion)
-            for joint in step.joints:
-                value = float(joints.get(joint.name, 0.0))
-                axis = np.asarray(joint.axis)
-                if joint.kind == "prismatic":
-                    position = position + rotation @ (axis * value)
-                else:  # turn about the axis through the anchor
-                    anchor = np.asarray(joint.anchor)
-                    turn = _axis_angle(axis, value)
-                    position = position + rotation @ (anchor - turn @ anchor)
-                    rotation = rotation @ turn
-        return position - np.asarray(self.root_position), rotation
-
-
-def _quat_matrix(q) -> np.ndarray:
-    w, x, y, z = (float(v) for v in q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-
-def _axis_angle(axis, angle: float) -> np.ndarray:
-    x, y, z = axis
-    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * (k @ k)
-
 
 def asset_link(asset: ArticulatedAsset, name: str, folders: Sequence[str] = ()) -> AssetLink:
     """Link `name` of `asset` (a PrscError naming the links when there is none of that name)."""
@@ -95,6 +62,8 @@ def asset_link(asset: ArticulatedAsset, name: str, folders: Sequence[str] = ()) 
 
 @lru_cache(maxsize=256)
 def _asset_link(source: str, digest: str, folders: tuple[str, ...], name: str) -> AssetLink:
+    import mujoco
+
     model = asset_spec(Path(source), folders).compile()
     body = model.body(name).id
     chain, b = [], body
@@ -114,6 +83,8 @@ def _asset_link(source: str, digest: str, folders: tuple[str, ...], name: str) -
             continue
         centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
         # The geom's box in the body frame (exact for boxes set along the body's axes).
-        local = (centre + corners * half) @ _quat_matrix(model.geom_quat[g]).T + model.geom_pos[g]
+        turn = np.zeros(9)
+        mujoco.mju_quat2Mat(turn, model.geom_quat[g])
+        local = (centre + corners * half) @ turn.reshape(3, 3).T + model.geom_pos[g]
         boxes.append((tuple(float(v) for v in local.min(axis=0)), tuple(float(v) for v in local.max(axis=0))))
     return AssetLink(name, tuple(reversed(chain)), tuple(float(v) for v in model.body_pos[root]), tuple(boxes))

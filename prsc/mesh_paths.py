@@ -38,10 +38,11 @@ def mesh_folders(spec: str, include_dirs: Sequence[str] = ()) -> tuple[str, ...]
     return (os.path.dirname(os.path.abspath(spec)), *include_dirs, LIBRARY)
 
 
-def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False) -> Path:
-    """The mesh file `raw` names, or a PrscError saying why it cannot be used."""
+def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False, what: str = "mesh") -> Path:
+    """The `what` file (a mesh, a texture, an asset) `raw` names, or a PrscError saying why it
+    cannot be used."""
     if not raw or "\0" in raw:
-        raise PrscError(f"mesh path {raw!r} is not a file name")
+        raise PrscError(f"{what} path {raw!r} is not a file name")
     if os.path.isabs(raw):
         candidates = [raw]
     else:
@@ -50,11 +51,11 @@ def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False) -> Pa
         if not os.path.isfile(candidate):
             continue
         if not anywhere and not any(_inside(candidate, folder) for folder in folders):
-            raise PrscError(f"mesh file {raw!r} is outside the spec's folder and the --include folders; "
+            raise PrscError(f"{what} file {raw!r} is outside the spec's folder and the --include folders; "
                             "pass --meshes-anywhere to read it")
         return Path(candidate).resolve()
     if os.path.isabs(raw):
-        raise PrscError(f"mesh file {raw!r} not found")
+        raise PrscError(f"{what} file {raw!r} not found")
     spec_folder, *included = distinct_folders(folders)
     searched = [f"the spec's folder {spec_folder}"]
     library = os.path.normpath(LIBRARY)
@@ -65,7 +66,7 @@ def resolve_mesh(raw: str, folders: Sequence[str], anywhere: bool = False) -> Pa
     if library != spec_folder:
         searched.append(f"the model library {library}")
     where = ", ".join(searched[:-1]) + " or " + searched[-1] if len(searched) > 1 else searched[0]
-    raise PrscError(f"mesh file {raw!r} not found in {where}")
+    raise PrscError(f"{what} file {raw!r} not found in {where}")
 
 
 def distinct_folders(folders: Sequence[str]) -> tuple[str, ...]:

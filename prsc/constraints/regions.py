@@ -11,6 +11,7 @@ from prsc.constraints.values import LinkValue, ObjectValue, RegionValue, as_posi
 from prsc.errors import PrscError, Span
 from prsc.geometry.boxes import Box
 from prsc.geometry.furniture import ASSET_SURFACES, asset_surfaces
+from prsc.geometry.kinematics import chain_pose
 from prsc.geometry.link_surfaces import Face, LinkSurfaces
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.rotations import compat_euler_to_matrix
@@ -174,20 +175,20 @@ def surface(target: Any, name: str, index: Any, span: Span | None) -> RegionValu
 
 def link(target: Any, label: str, chain: Any, surfaces: LinkSurfaces, root_offset: Sequence[float], ctx: Any,
          span: Span | None) -> LinkValue:
-    """`X.links["NAME"]`: the link's support surface and interior moved to X's pose and to
-    X's joint values in this scene (`chain` is the link's prsc.asset_links.AssetLink)."""
+    """`X.links["NAME"]`: the link's frame at X's pose and X's joint values in this scene, with
+    its support surface and interior (`chain` is the link's prsc.asset_links.AssetLink)."""
     if not isinstance(target, ObjectValue) or target.position is None or target.rotation is None:
         raise PrscError(f"{label} needs a placed object", span)
     joints = {j.name: float(target.get(joint_property(j.name), ctx, span)) for step in chain.chain for j in step.joints}
-    position, rotation = chain.pose(joints)
+    position, rotation = chain_pose(chain.chain, joints)
+    position = position - np.asarray(chain.root_position)  # from the root body's origin, as the box is
     origin = target.position + target.rotation @ (np.asarray(root_offset) + position)
     axes = target.rotation @ rotation
+    return LinkValue(label, origin, axes, surfaces.support, surfaces.interior)
 
-    def placed(face: Face | None) -> RegionValue | None:
-        if face is None:
-            return None
-        width, length = face.size
-        poly = Polytope.from_rectangle(origin + axes @ np.asarray(face.centre), axes, width, length)
-        return RegionValue("rectangle", poly, up_normal(axes[:, 2]))
 
-    return LinkValue(label, placed(surfaces.support), placed(surfaces.interior))
+def link_face(link: LinkValue, face: Face) -> RegionValue:
+    """A face of a placed link as a world rectangle (a planar region)."""
+    width, length = face.size
+    poly = Polytope.from_rectangle(link.origin + link.axes @ np.asarray(face.centre), link.axes, width, length)
+    return RegionValue("rectangle", poly, up_normal(link.axes[:, 2]))

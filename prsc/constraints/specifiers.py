@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.model import Support
+from prsc.constraints.regions import link_face
 from prsc.constraints.values import LinkValue, ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
 from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES, Interior, asset_interior, declared_interior
@@ -86,7 +87,7 @@ def rows_in(region: Any, completely: bool, support: Support, label: int, span: S
     link, on its floor within its walls."""
     if isinstance(region, LinkValue):
         link_target_error(region.label, region.support is not None, region.interior is not None, True, completely, span)
-        return _rows_on_surface(region.interior, completely, support, label, span)  # type: ignore[arg-type]
+        return _rows_on_surface(link_face(region, region.interior), completely, support, label, span)
     if not isinstance(region, RegionValue):
         raise PrscError("'in' needs a region", span)
     poly = region.poly
@@ -121,7 +122,7 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
         return _rows_on_surface(target, completely, support, label, span)
     if isinstance(target, LinkValue):
         link_target_error(target.label, target.support is not None, target.interior is not None, False, completely, span)
-        return _rows_on_surface(target.support, completely, support, label, span)  # type: ignore[arg-type]
+        return _rows_on_surface(link_face(target, target.support), completely, support, label, span)
     point = as_position(target)
     if point is not None:
         return _point_rows(point + _UP * float(support(_UP[None, :])[0]), label)

@@ -110,12 +110,15 @@ class RegionValue:
 
 @dataclass(frozen=True)
 class LinkValue:
-    """A link of an articulated object placed in the scene (`X.links["NAME"]`): its support
-    surface and its interior as world rectangles (None where it has none)."""
+    """A link of an articulated object placed in the scene (`X.links["NAME"]`): its frame in
+    the world and its support surface and interior in that frame (None where it has none)."""
 
     label: str  # as written: cabinet.links['drawer']
-    support: RegionValue | None
-    interior: RegionValue | None
+    origin: Vector
+    axes: NDArray[np.float64]  # columns: the link's axes in the world
+    support: Any  # prsc.geometry.link_surfaces.Face | None: made a region only when used
+    interior: Any
+
 
 
 def as_position(value: Any) -> Vector | None:

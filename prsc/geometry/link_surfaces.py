@@ -12,6 +12,7 @@ scene_synthesizer's support and containment labels find, as exact rectangles.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Sequence
 
 Box = tuple[tuple[float, float, float], tuple[float, float, float]]
@@ -99,8 +100,10 @@ def _clear_face(top: Box, boxes: Sequence[Box]) -> Face | None:
     return Face(x0, x1, y0, y1, z, wall_top)
 
 
-def link_surfaces(boxes: Sequence[Box]) -> LinkSurfaces:
-    """The support surface and interior of a link made of `boxes` (its collision geometry)."""
+@lru_cache(maxsize=64)
+def link_surfaces(boxes: tuple[Box, ...]) -> LinkSurfaces:
+    """The support surface and interior of a link made of `boxes` (its collision geometry;
+    cached: the lowering's check and the expression compiler both ask for it)."""
     faces = [face for box in boxes if (face := _clear_face(box, boxes)) is not None]
     rank = lambda face: (round(face.area, 9), face.z)  # noqa: E731 - largest, then highest
     support = max(faces, key=rank, default=None)

@@ -135,8 +135,8 @@ def _library_cabinet(obj: ObjectDecl, model: ir.Const) -> ObjectDecl:
         raise PrscError(f"{obj.name}: {error.message}", (obj.prop("drawers") or model).span) from None
     props = dict(obj.properties)
     props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
-    for name in SIZES:  # they made the file, whose box they are: no longer written by the spec
-        props[name] = ir.Const(BUILTIN_SPAN, ir.Type.SCALAR, values[name])
+    for name in SIZES:  # they made the file, and the file's box (_fitted) is theirs
+        del props[name]
     return replace(obj, properties=tuple(props.items()))
 
 

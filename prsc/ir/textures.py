@@ -24,9 +24,9 @@ def _checked(obj: ObjectDecl, texture: ir.Expr, folders: Sequence[str]) -> Objec
         raise PrscError(f"{obj.name}: `texture` must be a file name, or a choice among file names", texture.span)
     for raw in names:
         try:
-            read_image(resolve_mesh(raw, folders, anywhere=True))
+            read_image(resolve_mesh(raw, folders, anywhere=True, what="texture"))
         except PrscError as error:
-            raise PrscError(f"{obj.name}: {error.message.replace('mesh file', 'texture file')}", texture.span) from None
+            raise PrscError(f"{obj.name}: {error.message}", texture.span) from None
     return obj
 
 
