@@ -85,12 +85,18 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
 
 
 def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarray, home: np.ndarray,
-                   approach: float) -> tuple[np.ndarray, bool]:
+                   approach: float, restarts: int = 0) -> tuple[np.ndarray, bool]:
     """The point `approach` above `goal`, then `goal` itself, each top-down; from `seed`,
-    else from home and two bent starts (a straight-up home is singular for a top-down pose)."""
+    else from home and two bent starts (a straight-up home is singular for a top-down pose),
+    else from `restarts` starts drawn within the joint limits (the same ones every call)."""
     above = goal + np.array([0.0, 0.0, approach])
     bend = np.where(np.arange(len(home)) % 2, 0.5, -0.5)
-    for start in (seed, home, home + bend, home - bend):
+    starts = [seed, home, home + bend, home - bend]
+    if restarts:
+        lower = np.where(np.isfinite(arm.lower), arm.lower, home - math.pi)
+        upper = np.where(np.isfinite(arm.upper), arm.upper, home + math.pi)
+        starts += list(np.random.default_rng(0).uniform(lower, upper, (restarts, len(home))))
+    for start in starts:
         q, ok = solve_top_down(model, data, arm, above, start)
         if ok:
             q, ok = solve_top_down(model, data, arm, goal, q)

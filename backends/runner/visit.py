@@ -28,6 +28,7 @@ APPROACH = 0.10  # m above that, reached first
 TOLERANCE = 0.01  # m
 ANGLE = 0.1  # rad
 TIMEOUT = 8.0  # simulated s per point
+RESTARTS = 4  # IK starts within the joint limits when home's fail (as `reachable by` measures the reach)
 
 
 def _robot(scene: dict) -> tuple[dict, object]:
@@ -66,7 +67,7 @@ class Visit:
             goal = np.asarray(cube["position"], float) + np.array([0.0, 0.0, HOVER])
             above = goal + np.array([0.0, 0.0, APPROACH])
             scratch.qpos[:] = data.qpos
-            q, ok = reach_top_down(model, scratch, arm, goal, q, home, APPROACH)
+            q, ok = reach_top_down(model, scratch, arm, goal, q, home, APPROACH, restarts=RESTARTS)
             q_above, ok_above = solve_top_down(model, scratch, arm, above, q)
             if not (ok and ok_above):
                 return {"outcome": "unreachable", "reason": f"no top-down pose above {cube['name']}", "worst": worst}

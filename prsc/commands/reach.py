@@ -12,11 +12,14 @@ one as the controller does. Along each ray from the base (24 directions, every 1
 degrees) and at each height (HEIGHTS) the longest run of reachable radii is scanned every
 5 cm and its ends bisected to 3 mm.
 
-The reachable set is an annulus about the base, not convex. prsc keeps one convex cell
-inside it (convex_cell): the half-plane ahead of the base beyond the largest inner
-radius, cut by the chord of every sector's outer radius, over the heights CELL_LEVELS,
-each bound shrunk by a margin. docs/sampling.md reports how much of a tray it keeps
-(`--tray-report SPEC` measures it against the IK on a grid).
+The reachable set is an annulus about the base, not convex. prsc keeps it as a ring of
+exact rows (panda_ring, prsc/constraints/reach_ring.py): an outer convex cell under the
+chord of every sector's outer radius, minus a convex hole about the largest inner radii,
+over the heights CELL_LEVELS, each bound shrunk by a margin. docs/sampling.md reports how
+much of a tray it keeps (`--tray-report SPEC` measures it against the IK on a grid).
+
+`prsc reach ARM_FILE` does the same for an arm from a file (prsc/constraints/arm_reach.py)
+and measures the ring against the arm's true top-down reach on a grid.
 """
 
 from __future__ import annotations
@@ -24,11 +27,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from prsc.files import atomic_write
+from prsc.constraints.reach_ring import ReachRing, contains, ring_from_rays, ring_json
 from prsc.geometry.rotations import quat_to_matrix
 
 APPROACH = 0.12  # m: the controller's approach height above the grasp point
@@ -108,31 +113,13 @@ def _boundary(reach: TopDownReach, angle: float, height: float, inside: float, o
     return inside
 
 
-def convex_cell(rays: dict, angles: list[float]) -> tuple[list, list]:
-    """One convex cell ahead of the base: y >= the largest inner radius, under every sector's outer chord.
-
-    A point with y >= d is at least d from the base, so past every inner radius <= d; a
-    point under sector j's chord is within that sector's outer radius. Spans the heights
-    CELL_LEVELS. Sectors wholly behind the line y = d are cut by it and need no chord.
-    """
-    inner = max(rays[k, j][0] for k in CELL_LEVELS for j in range(SECTORS) if abs(angles[j]) <= math.pi / 2)
-    d = inner + INNER_MARGIN
-    rows, offsets = [[0.0, -1.0, 0.0]], [-d]
-    for j in range(SECTORS):
-        a0, a1 = angles[j], angles[j + 1]
-        if min(abs(a0), abs(a1)) >= math.pi / 2:
-            continue
-        ends = [rays[k, jj] for k in CELL_LEVELS for jj in (j, j + 1)]
-        r_out = min(e[1] for e in ends if e is not None) - MARGIN
-        if any(e is None for e in ends) or r_out <= d:
-            raise ValueError(f"no reach along the sector {math.degrees(a0):.0f}..{math.degrees(a1):.0f} deg")
-        radial = _ray_point((a0 + a1) / 2, 1.0, 0.0)
-        rows.append([float(v) for v in radial])
-        offsets.append(r_out * math.cos((a1 - a0) / 2))
-    z0, z1 = HEIGHTS[CELL_LEVELS[0]], HEIGHTS[CELL_LEVELS[-1]]
-    rows += [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]
-    offsets += [z1, -z0]
-    return rows, [float(v) for v in offsets]
+def panda_ring(rays: dict, angles: list[float]) -> ReachRing:
+    """The reach kept over the heights CELL_LEVELS: an outer cell minus a hole and a gap
+    (prsc/constraints/reach_ring.py); the rays' angles turn from +y (ahead here) to the ring's
+    x-ahead convention by +90 deg."""
+    per_ray = [[rays[k, j] for k in CELL_LEVELS] for j in range(SECTORS)]
+    return ring_from_rays([a + math.pi / 2 for a in angles[:SECTORS]], [HEIGHTS[k] for k in CELL_LEVELS], per_ray,
+                          MARGIN, INNER_MARGIN)
 
 
 def compute() -> dict:
@@ -144,7 +131,7 @@ def compute() -> dict:
         for j in range(SECTORS):
             rays[k, j] = ray_interval(reach, angles[j], height)
         rays[k, SECTORS] = rays[k, 0]
-    cell_a, cell_b = convex_cell(rays, angles)
+    ring = panda_ring(rays, angles)
     return {
         "robot": "panda",
         "frame": "the arm's base: origin at the bottom centre of the Robot box, +y ahead, +z up",
@@ -154,7 +141,7 @@ def compute() -> dict:
         "rays": [[k, j, *(rays[k, j] or (None, None))] for k in range(len(HEIGHTS)) for j in range(SECTORS)],
         "margin": MARGIN,
         "inner_margin": INNER_MARGIN,
-        "cell": {"A": cell_a, "b": cell_b, "heights": [HEIGHTS[CELL_LEVELS[0]], HEIGHTS[CELL_LEVELS[-1]]]},
+        "ring": {**ring_json(ring), "heights": [HEIGHTS[CELL_LEVELS[0]], HEIGHTS[CELL_LEVELS[-1]]]},
     }
 
 
@@ -175,7 +162,7 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     centre, dims = np.asarray(objects[tray]["position"]), np.asarray(objects[tray]["dimensions"])
     half_cube = np.asarray(objects[cube]["dimensions"]) / 2
     z = objects[cube]["position"][2]
-    a, b = reach_cell(objects[robot]["model"])
+    ring = reach_cell(objects[robot]["model"])
     reach = TopDownReach()
     xs = np.arange(centre[0] - dims[0] / 2 + half_cube[0], centre[0] + dims[0] / 2 - half_cube[0] + 1e-9, step)
     ys = np.arange(centre[1] - dims[1] / 2 + half_cube[1], centre[1] + dims[1] / 2 - half_cube[1] + 1e-9, step)
@@ -183,7 +170,7 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     for x in xs:
         for y in ys:
             q = rot.T @ (np.array([x, y, z]) - base)
-            in_cell, reached = bool(np.all(a @ q <= b)), reach.reaches(q)
+            in_cell, reached = bool(contains(ring, q)[0]), reach.reaches(q)
             counts["points"] += 1
             counts["in_cell"] += in_cell
             counts["reached"] += reached
@@ -198,32 +185,6 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     }
 
 
-def _reached_area(rays: list, height: float) -> float:
-    """The area the tool reaches top-down over the half ahead at `height`, from the rays
-    (each sector between two rays an annulus sector with their mean radii)."""
-    at = sorted((r[1], r[2], r[3]) for r in rays if r[0] == height and r[2] is not None)
-    return sum((b[0] - a[0]) * (((a[2] + b[2]) / 2) ** 2 - ((a[1] + b[1]) / 2) ** 2) / 2 for a, b in zip(at, at[1:]))
-
-
-def _cell_polygon(a: np.ndarray, b: np.ndarray, height: float) -> np.ndarray:
-    """Corners (x, y) of the cell's cut at `height`, in order."""
-    from scipy.spatial import ConvexHull, HalfspaceIntersection
-
-    rows = a[:, :2]
-    offsets = b - a[:, 2] * height
-    keep = np.linalg.norm(rows, axis=1) > 1e-12
-    halfspaces = np.hstack([rows[keep], -offsets[keep, None]])
-    from scipy.optimize import linprog
-
-    # An interior point: the centre of the largest disc in the cut (Chebyshev centre).
-    norms = np.linalg.norm(rows[keep], axis=1)
-    fit = linprog([0, 0, -1], A_ub=np.hstack([rows[keep], norms[:, None]]), b_ub=offsets[keep],
-                  bounds=[(None, None), (None, None), (0, None)])
-    inside = fit.x[:2]
-    corners = HalfspaceIntersection(halfspaces, inside).intersections
-    return corners[ConvexHull(corners).vertices]
-
-
 def add_parser(sub) -> None:
     """`prsc reach ARM_FILE`: build an arm's top-down reachable cell, report its coverage, draw it."""
     parser = sub.add_parser("reach", help="build a URDF/MJCF arm's `reachable by` cell; report its coverage; draw it",
@@ -231,11 +192,13 @@ def add_parser(sub) -> None:
     parser.add_argument("arm", help="the arm's URDF or MJCF file")
     parser.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
                         help="folders where `package://` names are looked up")
-    parser.add_argument("--plot", metavar="PNG", help="draw the reach and the cell at the table plane into PNG")
+    parser.add_argument("--grid", type=float, default=0.03, metavar="M",
+                        help="the step of the grid the true reach is measured on (default 0.03 m)")
+    parser.add_argument("--plot", metavar="PNG", help="draw the true reach and the ring at the root's height into PNG")
 
 
 def run(args) -> int:
-    """Build (or read from the cache) the arm's cell and print what it keeps."""
+    """Build (or read from the cache) the arm's reach and print what it keeps of the true reach."""
     import time
 
     from prsc.asset_files import describe_asset
@@ -244,6 +207,8 @@ def run(args) -> int:
 
     if not Path(args.arm).is_file():
         raise PrscError(f"no file {args.arm}")
+    if not args.grid > 0:
+        raise PrscError(f"--grid must be a step > 0 m, not {args.grid}")
     asset = describe_asset(args.arm, args.include)
     if not asset.has_joints:
         raise PrscError(f"{args.arm} has no joints: not an arm")
@@ -254,42 +219,70 @@ def run(args) -> int:
     except ValueError as error:
         raise PrscError(f"{args.arm}: {error}") from None
     seconds = time.process_time() - start
-    print(f"{asset.name}: {len(asset.joints)} joints, tool {asset.tcp}; cell of {len(cell.b)} rows "
-          f"({'read from the cache' if cached else f'built in {seconds:.1f} s of CPU'}): {reach_cache(asset)}")
-    for height in HEIGHTS:
-        reach = _reached_area(list(cell.rays), height)
-        corners = _cell_polygon(cell.a, cell.b, height)
-        x, y = corners[:, 0], corners[:, 1]
-        area = 0.5 * abs(float(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1))))
-        far = float(np.max(np.hypot(x, y)))
-        print(f"  {height:+.3f} m: the cell keeps {area:.3f} m^2 of the {reach:.3f} m^2 reached top-down over the "
-              f"half ahead ({100 * area / reach:.0f} %), farthest point {far:.3f} m from the base")
+    ring = cell.ring
+    print(f"{asset.name}: {len(asset.joints)} joints, tool {asset.tcp}; reach of {len(ring.b)} rows less a hole of "
+          f"{len(ring.hole_b)} ({'read from the cache' if cached else f'built in {seconds:.1f} s of CPU'}): "
+          f"{reach_cache(asset)}")
+    height = HEIGHTS[0]
+    grid = true_reach_grid(asset, height, args.grid)
+    kept = contains(ring, grid.points)
+    reached = grid.reached
+    both = int(np.count_nonzero(kept & reached))
+    far = float(np.max(np.hypot(*grid.points[kept, :2].T))) if kept.any() else 0.0
+    print(f"  at the root's height, on a {args.grid * 100:g} cm grid with the IK ({grid.seconds:.1f} s): the tool reaches "
+          f"{int(reached.sum())} points top-down; the ring keeps {both} of them ({100 * both / max(int(reached.sum()), 1):.1f} %) "
+          f"and {int(kept.sum()) - both} points it does not reach; farthest kept point {far:.3f} m from the base")
     if args.plot:
-        _plot(cell, args.plot, asset.name)
+        _plot(ring, grid, args.plot, asset.name)
         print(f"drawn: {args.plot}")
     return 0
 
 
-def _plot(cell, path: str, name: str) -> None:
+@dataclass(frozen=True)
+class ReachGrid:
+    """Points (root frame) on a grid about an arm's base, whether its tool reaches each top-down."""
+
+    points: np.ndarray
+    reached: np.ndarray
+    seconds: float
+
+
+def true_reach_grid(asset, height: float, step: float) -> ReachGrid:
+    """The arm's true top-down reach at `height` above its root: the IK at every grid point
+    within its longest arm's length, from home and from home turned towards the point."""
+    import time
+
+    from prsc.constraints.arm_reach import TopDownIK
+
+    ik = TopDownIK(asset)
+    extent = ik.span() + step
+    xs = np.arange(-extent, extent + step / 2, step)
+    points = np.array([[x, y, height] for x in xs for y in xs if math.hypot(x, y) <= extent])
+    start = time.process_time()
+    reached = np.array([ik.reaches_from_home(p) for p in points], dtype=bool)
+    return ReachGrid(points, reached, time.process_time() - start)
+
+
+def _plot(ring: ReachRing, grid: ReachGrid, path: str, name: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     figure, axes = plt.subplots(figsize=(6, 6))
-    height = min(r[0] for r in cell.rays)
-    for h, angle, inner, outer in cell.rays:
-        if h == height and inner is not None:
-            direction = np.array([math.cos(angle), math.sin(angle)])
-            axes.plot(*np.array([inner * direction, outer * direction]).T, color="0.6")
-    corners = _cell_polygon(cell.a, cell.b, height)
-    axes.fill(corners[:, 0], corners[:, 1], alpha=0.4, label="cell (`reachable by`)")
+    kept = contains(ring, grid.points)
+    for mask, colour, label in ((grid.reached & kept, "tab:green", "reached, kept"),
+                                (grid.reached & ~kept, "tab:orange", "reached, not kept"),
+                                (~grid.reached & kept, "tab:red", "kept, not reached")):
+        if mask.any():
+            axes.scatter(grid.points[mask, 0], grid.points[mask, 1], s=4, color=colour, label=label)
     axes.plot([0], [0], "k+", label="base")
     axes.set_aspect("equal")
     axes.set_xlabel("x (m, ahead)")
     axes.set_ylabel("y (m)")
-    axes.set_title(f"{name}: top-down reach at the base's height\n(grey: reached along each ray)", fontsize=10)
-    axes.legend(loc="lower left")
+    axes.set_title(f"{name}: top-down reach at the root's height\n(the ring `reachable by` keeps, against the IK)",
+                   fontsize=10)
+    axes.legend(loc="lower left", fontsize=8)
     figure.savefig(path, dpi=100)
     plt.close(figure)
 

@@ -30,6 +30,7 @@ LOCATED_ARGS = {
     "direction": (0,),
     "aligned": (0,),
     "reachable": (0,),
+    "unreachable": (0,),
     "stably": tuple(range(64)),  # the support and every support under it
     "visible": (0,),
     "not visible": (0,),

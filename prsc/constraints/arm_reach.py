@@ -1,17 +1,16 @@
-"""`reachable by R` for an arm from a file (docs/assets.md): one convex cell of the points
-its tool reaches top-down, computed from the arm's own kinematics and cached by the file's
-content in the build folder (`$PRSC_BUILD_DIR/reach/<key>.json`), so a second compile
-costs nothing.
+"""`reachable by R` for an arm from a file (docs/assets.md): the points its tool reaches
+top-down, computed from the arm's own kinematics as a ring of exact rows (an outer convex
+cell less a hole and a gap, prsc/constraints/reach_ring.py) and cached by the file's content in
+the build folder (`$PRSC_BUILD_DIR/reach/<key>.json`), so a second compile costs nothing.
 
 Top-down means the tool frame's +z (the flange normal of a URDF arm's last link, or the
 `tcp` site's z) points straight down, any yaw. A point counts as reached when a damped
 least-squares IK on the arm's MuJoCo model brings the tool there within 2 mm and 0.02 rad,
-and also 12 cm above it (the approach). Along each ray from the base (every 15 degrees over
-the half ahead, +x of the file's root frame, the ROS convention) and at each height
-(HEIGHTS above the root's origin) the reachable radii are scanned every 5 cm and the
-outer end bisected to 3 mm. The cell is the half-space ahead of the base beyond the
-largest inner radius, cut by the chord of every sector's outer radius, each bound
-shrunk by a margin: the same construction as the Panda's (prsc/commands/reach.py).
+and also 12 cm above it (the approach). Along each ray from the base (SECTORS all the way
+round, +x of the file's root frame ahead, the ROS convention) and at each height (HEIGHTS
+above the root's origin) the reachable radii are scanned every STEP and both ends bisected
+to 3 mm. Each bound is then shrunk by a margin: between two rays the reach is taken to be
+no less than at the nearer of them, less the margin.
 """
 
 from __future__ import annotations
@@ -27,23 +26,25 @@ import numpy as np
 from prsc.arm_ik import ArmFrames, reach_top_down
 from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
+from prsc.constraints.reach_ring import RING_KEYS, ReachRing, ring_from_rays, ring_json
 
-RECIPE_VERSION = "3"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "4"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = 0.12  # m above the point the tool must also reach
+RESTARTS = 4  # starts within the joint limits after home's: a 7-joint arm's IK misses a third of its reach without
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
-SECTORS = 12  # rays over the half ahead: every 15 degrees from -90 to +90
-RADII = tuple(round(0.05 + 0.05 * i, 3) for i in range(30))  # the coarse scan, m
-REFINE = 4  # bisections of the outer end (5 cm / 2^4 ~ 3 mm)
-MARGIN = 0.01  # m taken off the outer radii
-INNER_MARGIN = 0.03  # m added to the inner radius
+SECTORS = 36  # rays all the way round: every 10 degrees
+STEP = 0.05  # m between radii of the coarse scan
+RADII = tuple(round(STEP * (i + 1), 3) for i in range(30))  # the coarse scan, m
+REFINE = 4  # bisections of each end (5 cm / 2^4 ~ 3 mm)
+MARGIN = 0.006  # m taken off the outer radii
+INNER_MARGIN = 0.01  # m added to the inner radii
 
 
 @dataclass(frozen=True)
 class ReachCell:
-    """The cell's rows A p <= b in the arm's root frame, and how it was measured."""
+    """The reach's rows in the arm's root frame, and the rays they were built from."""
 
-    a: np.ndarray
-    b: np.ndarray
+    ring: ReachRing
     rays: tuple[tuple[float, float, float | None, float | None], ...]  # (height, angle, inner, outer)
 
 
@@ -54,15 +55,46 @@ class TopDownIK:
         import mujoco
 
         self.model = asset_spec(asset.source).compile()
+        self.root_name = asset.root
         self.data = mujoco.MjData(self.model)
         self.arm = ArmFrames.of(self.model, [j.name for j in asset.joints], str(asset.tcp))
         self.home = np.array([j.home for j in asset.joints])
+        self.data.qpos[self.arm.qpos] = self.home
         mujoco.mj_kinematics(self.model, self.data)
         self.root = self.data.xpos[self.model.body(asset.root).id].copy()
+        tool = self.arm.tool_pose(self.data)[0] - self.root
+        self.heading = math.atan2(tool[1], tool[0])  # where the tool points at home
 
-    def reaches(self, point: np.ndarray, seed: np.ndarray) -> tuple[np.ndarray, bool]:
-        """Whether the tool reaches the point (root frame) and the approach above it, top-down."""
-        return reach_top_down(self.model, self.data, self.arm, point + self.root, seed, self.home, APPROACH)
+    def reaches(self, point: np.ndarray, seed: np.ndarray, restarts: int = 0) -> tuple[np.ndarray, bool]:
+        """Whether the tool reaches the point (root frame) and the approach above it, top-down,
+        from `seed`, else from home turned towards the point (and that bent), else from `restarts` more."""
+        home = self.turned(math.atan2(point[1], point[0]))
+        return reach_top_down(self.model, self.data, self.arm, point + self.root, seed, home, APPROACH, restarts)
+
+    def turned(self, azimuth: float) -> np.ndarray:
+        """Home with the first joint turned so that the tool heads towards `azimuth` (a base yaw
+        joint, as most arms have; for another first joint it is one more start)."""
+        q = self.home.copy()
+        turn = (azimuth - self.heading + math.pi) % (2 * math.pi) - math.pi
+        q[0] = float(np.clip(q[0] + turn, self.arm.lower[0], self.arm.upper[0]))
+        return q
+
+    def reaches_from_home(self, point: np.ndarray) -> bool:
+        """Whether the tool reaches the point top-down from home turned towards it (and that bent)."""
+        return self.reaches(point, self.turned(math.atan2(point[1], point[0])), RESTARTS)[1]
+
+    def span(self) -> float:
+        """An upper bound of the tool's distance from the root: the chain's offsets added up."""
+        model = self.model
+        body = self.arm.tool
+        total = 0.0
+        if self.arm.tool_is_site:
+            total, body = float(np.linalg.norm(model.site_pos[body])), int(model.site_bodyid[body])
+        root = self.model.body(self.root_name).id
+        while body not in (root, 0):
+            total += float(np.linalg.norm(model.body_pos[body]))
+            body = int(model.body_parentid[body])
+        return total
 
 
 def _ray_point(angle: float, radius: float, height: float) -> np.ndarray:
@@ -70,52 +102,74 @@ def _ray_point(angle: float, radius: float, height: float) -> np.ndarray:
     return np.array([radius * math.cos(angle), radius * math.sin(angle), height])
 
 
-def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | None:
-    """The first run of reachable radii along a ray, its outer end refined; None if none."""
-    q = ik.home
-    run: list[float] = []
-    last_q = q
-    for radius in RADII:
-        q_new, ok = ik.reaches(_ray_point(angle, radius, height), q)
+def _bisect(ik: TopDownIK, angle: float, height: float, inside: float, outside: float, q: np.ndarray) -> float:
+    """The reached radius nearest the boundary between `inside` (reached from q) and `outside`."""
+    for _ in range(REFINE):
+        mid = (inside + outside) / 2
+        q_mid, ok = ik.reaches(_ray_point(angle, mid, height), q)
         if ok:
-            run.append(radius)
-            q = last_q = q_new
-        elif run:
+            inside, q = mid, q_mid
+        else:
+            outside = mid
+    return inside
+
+
+def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | None:
+    """The first run of reachable radii along a ray, both ends refined; None if none.
+
+    Outwards from home every STEP, then inwards from the first radius reached, each IK
+    started from the last solution (from home alone the IK misses points near the base).
+    A run ends only where RESTARTS more starts fail too (a 7-joint arm's IK stalls at
+    points it reaches); before the run, where most points fail, they are spared."""
+    q = ik.turned(angle)
+    run: list[float] = []
+    first_q = last_q = q
+    for restarts in (0, RESTARTS):
+        for radius in RADII:
+            point = _ray_point(angle, radius, height)
+            q_new, ok = ik.reaches(point, q, restarts if not run else 0)
+            if not ok and run:
+                q_new, ok = ik.reaches(point, q, RESTARTS)
+            if ok:
+                if not run:
+                    first_q = q_new
+                run.append(radius)
+                q = last_q = q_new
+            elif run:
+                break
+        if run:
             break
     if not run:
         return None
-    inside, outside = run[-1], run[-1] + (RADII[1] - RADII[0])
-    for _ in range(REFINE):
-        mid = (inside + outside) / 2
-        q_mid, ok = ik.reaches(_ray_point(angle, mid, height), last_q)
-        if ok:
-            inside, last_q = mid, q_mid
-        else:
-            outside = mid
-    return run[0], inside
+    outer = _bisect(ik, angle, height, run[-1], run[-1] + STEP, last_q)
+    inner, q = run[0], first_q
+    while inner - STEP / 2 > 0:
+        q_new, ok = ik.reaches(_ray_point(angle, inner - STEP / 2, height), q)
+        if not ok:
+            break
+        inner, q = inner - STEP / 2, q_new
+    if inner - STEP / 2 > 0:
+        inner = _bisect(ik, angle, height, inner, inner - STEP / 2, q)
+    return inner, outer
+
+
+def ray_angles() -> list[float]:
+    """The rays' directions, all the way round from straight behind (radians, 0 ahead)."""
+    return [-math.pi + 2 * math.pi * j / SECTORS for j in range(SECTORS)]
 
 
 def compute_cell(asset: ArticulatedAsset) -> ReachCell:
-    """The arm's convex top-down cell (a few seconds of IK)."""
+    """The arm's top-down reach as a ring of exact rows (some seconds of IK)."""
     ik = TopDownIK(asset)
-    angles = [-math.pi / 2 + math.pi * j / SECTORS for j in range(SECTORS + 1)]
+    angles = ray_angles()
     rays = {(k, j): _ray(ik, angle, height) for k, height in enumerate(HEIGHTS) for j, angle in enumerate(angles)}
-    if any(r is None for r in rays.values()):
-        missing = sorted({round(math.degrees(angles[j])) for (k, j), r in rays.items() if r is None})
-        raise ValueError(f"the tool reaches nothing top-down along the rays at {missing} degrees")
-    inner = max(r[0] for r in rays.values()) + INNER_MARGIN  # type: ignore[index]
-    rows, offsets = [[-1.0, 0.0, 0.0]], [-inner]
-    for j in range(SECTORS):
-        r_out = min(rays[k, jj][1] for k in range(len(HEIGHTS)) for jj in (j, j + 1)) - MARGIN  # type: ignore[index]
-        if r_out <= inner:
-            raise ValueError("the arm's top-down reach is too thin ahead of its base for one convex cell")
-        half = (angles[j + 1] - angles[j]) / 2
-        rows.append(list(_ray_point(angles[j] + half, 1.0, 0.0)))
-        offsets.append(r_out * math.cos(half))
-    rows += [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]
-    offsets += [HEIGHTS[-1], -HEIGHTS[0]]
+    per_ray = [[rays[k, j] for k in range(len(HEIGHTS))] for j in range(SECTORS)]
+    try:
+        ring = ring_from_rays(angles, list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)  # type: ignore[arg-type]
+    except ValueError as error:
+        raise ValueError(f"{error} (rays every {360 // SECTORS} degrees at heights {list(HEIGHTS)} m)") from None
     table = tuple((HEIGHTS[k], angles[j], *(rays[k, j] or (None, None))) for k, j in sorted(rays))
-    return ReachCell(np.array(rows), np.array(offsets), table)  # type: ignore[arg-type]
+    return ReachCell(ring, table)  # type: ignore[arg-type]
 
 
 def reach_cache(asset: ArticulatedAsset) -> Path:
@@ -124,16 +178,20 @@ def reach_cache(asset: ArticulatedAsset) -> Path:
 
 
 def arm_reach_cell(asset: ArticulatedAsset) -> ReachCell:
-    """The arm's cell, computed on first use and read from the cache after."""
+    """The arm's reach, computed on first use and read from the cache after."""
     path = reach_cache(asset)
     if path.is_file():
         data = json.loads(path.read_text(encoding="utf-8"))
-        return ReachCell(np.array(data["A"]), np.array(data["b"]), tuple(tuple(r) for r in data["rays"]))
+        ring = ReachRing(*(np.array(data[key]) for key in RING_KEYS))
+        return ReachCell(ring, tuple(tuple(r) for r in data["rays"]))
     cell = compute_cell(asset)
     path.parent.mkdir(parents=True, exist_ok=True)
+    ring = cell.ring
     atomic_write(path, json.dumps({
         "asset": os.path.basename(asset.source), "sha256": asset.digest,
         "frame": "the arm's root frame: origin at the root body, +x ahead, +z up",
-        "A": cell.a.tolist(), "b": cell.b.tolist(), "rays": [list(r) for r in cell.rays],
+        "reach": "A p <= b, and neither hole_A p < hole_b nor gap_A p < gap_b",
+        **ring_json(ring),
+        "rays": [list(r) for r in cell.rays],
     }, indent=1) + "\n")
     return cell

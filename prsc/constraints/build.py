@@ -9,7 +9,7 @@ import numpy as np
 from prsc.constraints import specifiers as rows
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import Rule
-from prsc.constraints.reach import rows_reachable
+from prsc.constraints.reach import rows_reachable, rows_unreachable
 from prsc.constraints.stacks import rows_stably
 from prsc.constraints.support import Support
 from prsc.constraints.visibility import rows_visible
@@ -50,10 +50,11 @@ BUILDERS: dict[str, Builder] = {
     "workspace": lambda r, v, s: rows.rows_in(v[0], True, s, r.label_id, r.span),
     "require": _require_rows,
     "reachable": lambda r, v, s: rows_reachable(v[0], r.label_id, r.span),
+    "unreachable": lambda r, v, s: rows_unreachable(v[0], r.option("part"), r.label_id, r.span),
 }
 
 # Kinds whose rows never read the object's own box (its support function).
-SIZE_FREE = frozenset({"at", "beyond", "aligned", "reachable"})
+SIZE_FREE = frozenset({"at", "beyond", "aligned", "reachable", "unreachable"})
 
 
 def reads_support(rule: Rule) -> bool:

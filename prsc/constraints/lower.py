@@ -20,7 +20,7 @@ from prsc.constraints.diagnostics import explain_empty, numeric_failure
 from prsc.constraints.evaluate import Fn
 from prsc.constraints.model import EXCLUSION_KINDS, REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
 from prsc.constraints.orientation import orientation_rule
-from prsc.constraints.position import specifier_rule, workspace_rule
+from prsc.constraints.position import reach_hole_rules, specifier_rule, workspace_rule
 from prsc.constraints.specifiers import link_target_error
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
@@ -120,6 +120,8 @@ def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) ->
             exclusions.append(rule)
         elif rule is not None:
             rules.append(rule)
+            if rule.kind == "reachable":
+                exclusions += reach_hole_rules(low, rule, support, me)
     if low.program.workspace is not None:
         rules.append(workspace_rule(low, obj, low.program.workspace, support, me))
     checks: list[RequireCheck] = []

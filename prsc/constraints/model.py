@@ -33,8 +33,9 @@ POSITION = "position"
 DEAD_END = "dead end"
 CAUSES = (COLLISION, RELATIVE, CONTAINMENT, REQUIRE)
 
-# Rule kinds whose rows are a cell the centre must stay out of (ObjectPlan.exclusions).
-EXCLUSION_KINDS = frozenset({"not visible"})
+# Rule kinds whose rows are a cell the centre must stay out of (ObjectPlan.exclusions):
+# `not visible from C`, and the hole about a robot's base that `reachable by R` excludes.
+EXCLUSION_KINDS = frozenset({"not visible", "unreachable"})
 
 Evaluator = Callable[[SceneContext], Any]
 

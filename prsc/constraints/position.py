@@ -111,6 +111,12 @@ def specifier_rule(low: LoweringState, obj: ObjectDecl, spec: ir.Specifier, supp
     return rule
 
 
+def reach_hole_rules(low: LoweringState, rule: Rule, support: Support | None, me: ObjectValue) -> list[Rule]:
+    """The cells a `reachable by R` rule's object stays out of: the hole about R's base and the gap."""
+    return [_with_template(low, Rule("unreachable", rule.label_id, rule.span, rule.args, (("part", part),), None,
+                                     rule.soft, rule.values), support, me) for part in (0, 1)]
+
+
 def stack_below(low: LoweringState, target: ir.Expr) -> tuple[ir.Expr, ...]:
     """The supports under a `stably on X` target: what X stands `stably on`, what that stands on, ..."""
     chain: list[ir.Expr] = []

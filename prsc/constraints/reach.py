@@ -1,11 +1,12 @@
-"""`reachable by R`: the robot model's top-down reachable set as rows, read from shipped data.
+"""`reachable by R`: the robot's top-down reach as exact rows: an outer convex cell (the
+rule `reachable`) minus a convex hole about the base (the excluded cell `unreachable`).
 
-prsc/constraints/<model>_reach.json holds, in the arm base's frame (origin at the bottom
-centre of the Robot box, +y ahead, +z up), convex cells inside the set of points the
-tool centre reaches with the gripper pointing down (the handover's grasp). It is
-computed once from the arm's kinematics by `python -m prsc.commands.reach` (IK over a
-grid) and checked against the IK by tests/constraints/test_reach.py; docs/sampling.md
-says how much of the reachable set it keeps.
+For the Panda, prsc/constraints/panda_reach.json holds them in the arm base's frame
+(origin at the bottom centre of the Robot box, +y ahead, +z up), inside the set of points
+the tool centre reaches with the gripper pointing down (the handover's grasp). It is
+computed once from the arm's kinematics by `python -m prsc.commands.reach` and checked
+against the IK by tests/constraints/test_reach.py. An arm from a file gets the same from
+its own kinematics (arm_reach.py). docs/sampling.md says how much of the reach they keep.
 """
 
 from __future__ import annotations
@@ -21,19 +22,19 @@ from prsc.constraints.values import ObjectValue
 from prsc.ir.models import model_of
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope
+from prsc.constraints.reach_ring import RING_KEYS, ReachRing
 
 DATA = Path(__file__).resolve().parent
 
 
 @functools.lru_cache(maxsize=None)
-def reach_cell(model: str) -> tuple[np.ndarray, np.ndarray] | None:
-    """(A, b) of the model's convex cell in its base frame, or None when prsc has no data for it."""
+def reach_cell(model: str) -> ReachRing | None:
+    """The model's reach rows in its base frame, or None when prsc has no data for it."""
     path = reach_file(model)
     if not path.is_file():
         return None
-    data = json.loads(path.read_text(encoding="utf-8"))
-    cell = data["cell"]
-    return np.array(cell["A"], dtype=float), np.array(cell["b"], dtype=float)
+    ring = json.loads(path.read_text(encoding="utf-8"))["ring"]
+    return ReachRing(*(np.array(ring[key], dtype=float) for key in RING_KEYS))
 
 
 def reach_file(model: str) -> Path:
@@ -41,42 +42,51 @@ def reach_file(model: str) -> Path:
     return DATA / f"{model}_reach.json"
 
 
+def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarray, np.ndarray]:
+    """R's reach rows in its base frame, the base's position and R's rotation.
 
-def _rows_file_arm(robot: ObjectValue, path: str, label: int, span: Span | None) -> Polytope:
-    """`reachable by` an arm from a file: its cell in its root frame, moved to the root's pose."""
-    from prsc.constraints.arm_reach import arm_reach_cell
-
-    asset = describe_asset(path)
-    if not asset.has_joints:
-        raise PrscError(f"'reachable by' needs a robot: {robot.name}'s model {asset.name!r} has no joints", span)
-    try:
-        cell = arm_reach_cell(asset)
-    except ValueError as error:
-        raise PrscError(f"'reachable by' {robot.name}: {error}", span) from None
-    if robot.position is None or robot.rotation is None or robot.dims is None:
-        raise PrscError(f"{robot.name} is not placed yet here", span)
-    rot = robot.rotation
-    root = robot.position + rot @ np.array(asset.root_offset)
-    a = cell.a @ rot.T
-    return Polytope(a, cell.b + a @ root, np.zeros((0, 3)), np.zeros(0), np.full(len(a), label), np.zeros(0, np.int64))
-
-
-def rows_reachable(robot: object, label: int, span: Span | None) -> Polytope:
-    """`reachable by R`: p in R's reachable cell, moved to R's pose (base = centre - height/2 along R's z)."""
+    The base is the root body of an arm from a file, else the bottom centre of R's box."""
     if not isinstance(robot, ObjectValue):
         raise PrscError("'reachable by' needs a robot object", span)
     model = model_of(robot.props, robot.class_name)
     if names_asset_file(model):
-        return _rows_file_arm(robot, str(model), label, span)
-    cell = reach_cell(model) if isinstance(model, str) else None
-    if cell is None:
-        raise PrscError(f"'reachable by' needs a robot (the Panda, or an arm from a URDF or MJCF file: "
-                        f"docs/assets.md); {robot.name}'s model is {model!r}", span)
+        from prsc.constraints.arm_reach import arm_reach_cell
+
+        asset = describe_asset(str(model))
+        if not asset.has_joints:
+            raise PrscError(f"'reachable by' needs a robot: {robot.name}'s model {asset.name!r} has no joints", span)
+        try:
+            ring = arm_reach_cell(asset).ring
+        except ValueError as error:
+            raise PrscError(f"'reachable by' {robot.name}: {error}", span) from None
+        offset = np.array(asset.root_offset)
+    else:
+        found = reach_cell(model) if isinstance(model, str) else None
+        if found is None:
+            raise PrscError(f"'reachable by' needs a robot (the Panda, or an arm from a URDF or MJCF file: "
+                            f"docs/assets.md); {robot.name}'s model is {model!r}", span)
+        ring = found
+        offset = None
     if robot.position is None or robot.rotation is None or robot.dims is None:
         raise PrscError(f"{robot.name} is not placed yet here", span)
-    a_local, b_local = cell
     rot = robot.rotation
-    base = robot.position - rot[:, 2] * (robot.dims[2] * 0.5)
+    base = robot.position + rot @ offset if offset is not None else robot.position - rot[:, 2] * (robot.dims[2] * 0.5)
+    return ring, base, rot
+
+
+def _moved(a_local: np.ndarray, b_local: np.ndarray, base: np.ndarray, rot: np.ndarray, label: int) -> Polytope:
     # a . R^T (p - base) <= b  <=>  (a R^T) . p <= b + (a R^T) . base
     a = a_local @ rot.T
     return Polytope(a, b_local + a @ base, np.zeros((0, 3)), np.zeros(0), np.full(len(a), label), np.zeros(0, np.int64))
+
+
+def rows_reachable(robot: object, label: int, span: Span | None) -> Polytope:
+    """`reachable by R`: p in the outer cell of R's reach, moved to R's pose."""
+    ring, base, rot = _placed_ring(robot, span)
+    return _moved(ring.a, ring.b, base, rot, label)
+
+
+def rows_unreachable(robot: object, part: int, label: int, span: Span | None) -> Polytope:
+    """`reachable by R`'s excluded cell `part` (0: the hole about R's base, 1: the gap), moved to R's pose."""
+    ring, base, rot = _placed_ring(robot, span)
+    return _moved(*ring.excluded()[part], base, rot, label)

@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ARM = """<mujoco model="two_link"><compiler angle="radian"/><worldbody><body name="base"><geom type="cylinder" size="0.05 0.05"/>
@@ -77,5 +78,6 @@ def test_the_original_model_name_panda_is_reachable_by(tmp_path):
     for line in done.stdout.splitlines():
         objects = {o["name"]: o for o in json.loads(line)["objects"]}
         assert objects["r"]["model"] == "panda"
-        # The Panda's cell lies ahead of its base (+y of the Robot box), past 0.25 m.
-        assert objects["c"]["position"][1] - objects["r"]["position"][1] > 0.25
+        # In the Panda's ring about its base: past its inner radius (0.21 m), within its outer one (0.81 m).
+        offset = np.subtract(objects["c"]["position"], objects["r"]["position"])[:2]
+        assert 0.21 < np.hypot(*offset) < 0.81

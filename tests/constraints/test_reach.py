@@ -15,6 +15,7 @@ from prsc.constraints import lower_program
 from prsc.constraints.reach import reach_cell, reach_file
 from prsc.errors import PrscError
 from prsc.geometry.polytope import Polytope
+from prsc.constraints.reach_ring import contains, ring_json
 from prsc.geometry.sampler import prepare_sampler
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
@@ -41,15 +42,20 @@ def test_the_cell_is_what_the_script_derives_from_its_ik_rays():
     rays = {(k, j): (None if lo is None else (lo, hi)) for k, j, lo, hi in data["rays"]}
     for k in range(len(data["heights"])):
         rays[k, reach.SECTORS] = rays[k, 0]
-    a, b = reach.convex_cell(rays, reach._angles())
-    np.testing.assert_allclose(np.array(data["cell"]["A"]), a, atol=1e-12)
-    np.testing.assert_allclose(np.array(data["cell"]["b"]), b, atol=1e-12)
+    ring = reach.panda_ring(rays, reach._angles())
+    for key, value in ring_json(ring).items():
+        np.testing.assert_allclose(np.array(data["ring"][key]), np.array(value), atol=1e-12)
 
 
-def test_points_in_the_cell_are_reached_top_down_and_points_past_it_are_not(arm):
-    a, b = reach_cell("panda")
-    inside = _points(a, b, 10, seed=1)
-    assert all(arm.reaches(p) for p in inside), "a point of the shipped cell is out of the arm's reach"
+def test_points_in_the_ring_are_reached_top_down_and_points_past_it_are_not(arm):
+    ring = reach_cell("panda")
+    a, b = ring.a, ring.b
+    candidates = _points(a, b, 60, seed=1)
+    inside = candidates[contains(ring, candidates)][:12]
+    assert len(inside) == 12
+    # Some lie beside and behind the base (the old single cell kept only the half ahead, y > 0).
+    assert (inside[:, 1] < 0).sum() >= 2
+    assert all(arm.reaches(p) for p in inside), "a point of the shipped ring is out of the arm's reach"
     # The same test fails on a wrong cell: pushed 30 cm out, the part past the longest
     # radius the IK scan found (plus 5 cm) is out of reach.
     data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
@@ -78,7 +84,7 @@ def test_reachable_cubes_are_sampled_exactly_inside_the_cell_and_fill_it():
     # r1 is fixed: the rule's rows are static, and the cube's region still moves with its tray.
     assert rule.static and c1.region.anchor == "tr_1"
     sampler = Sampler(program, "exact")
-    a, b = reach_cell("panda")
+    ring = reach_cell("panda")
     inside, local = 0, []
     for index in range(300):
         result = sampler.sample(11, index)
@@ -87,7 +93,7 @@ def test_reachable_cubes_are_sampled_exactly_inside_the_cell_and_fill_it():
         robot = objects["r1"]
         base = robot.position - robot.rotation[:, 2] * robot.dims[2] / 2
         q = robot.rotation.T @ (objects["c1"].position - base)
-        inside += bool(np.all(a @ q <= b + 1e-9))
+        inside += bool(contains(ring, q, tol=1e-7)[0])
         local.append(q)
     assert inside == 300
     local = np.array(local)

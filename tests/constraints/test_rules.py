@@ -112,7 +112,8 @@ def test_explain_json_has_one_entry_per_rule(spec, capsys):
     assert main(["explain", str(spec), "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     cprog = lower_program(compile_program(str(spec), ()))
-    count = sum(len(p.rules) + len(p.checks) + (p.orientation is not None) for p in cprog.objects) + len(cprog.scene_checks)
+    count = sum(len(p.rules) + len(p.exclusions) + len(p.checks) + (p.orientation is not None)
+                for p in cprog.objects) + len(cprog.scene_checks)
     assert len(data["rules"]) == count and data["order"] == [p.name for p in cprog.objects]
     for entry in data["rules"]:
         assert entry["kind"] and entry["label"] and isinstance(entry["line"], int), entry

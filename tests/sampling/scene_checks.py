@@ -764,14 +764,17 @@ REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints"
 
 
 def _outside_reach(robot: Body, p: np.ndarray) -> str | None:
-    """Whether p is in the robot model's reachable cells, read from the shipped data file itself."""
+    """Whether p is in the robot model's reachable ring (the outer cell, out of the hole and
+    the gap), read from the shipped data file itself."""
     model = robot.data.get("properties", {}).get("model") or robot.data.get("model")
     path = REACH_DATA / f"{model}_reach.json"
     if not path.is_file():
         raise Unknown(f"no reach data for model {model!r}")
-    data = json.loads(path.read_text(encoding="utf-8"))
-    cells = [data["cell"]]
+    ring = json.loads(path.read_text(encoding="utf-8"))["ring"]
     base = robot.p - robot.r[:, 2] * robot.dims[2] / 2
     local = robot.r.T @ (p - base)
-    worst = min(float(np.max(np.array(c["A"]) @ local - np.array(c["b"]))) for c in cells)
+    outside = float(np.max(np.array(ring["A"]) @ local - np.array(ring["b"])))
+    # Inside an excluded cell by its least depth: every row holds with room to spare.
+    inside = [float(np.min(np.array(ring[key + "_b"]) - np.array(ring[key + "_A"]) @ local)) for key in ("hole", "gap")]
+    worst = max([outside] + inside)
     return None if worst <= TOL else f"outside {robot.name}'s reach by {worst:.3g} m"

@@ -1,0 +1,79 @@
+"""The ring of `reachable by`: an outer convex cell less a hole and a gap, from rays (prsc/constraints/reach_ring.py)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from prsc.constraints.reach_ring import contains, ring_from_rays
+
+SECTORS = 36
+ANGLES = [-math.pi + 2 * math.pi * j / SECTORS for j in range(SECTORS)]
+HEIGHTS = [0.0, 0.05, 0.15]
+
+
+def _points(radius: float, angle: float, z: float) -> np.ndarray:
+    return np.array([[radius * math.cos(angle), radius * math.sin(angle), z]])
+
+
+def _inside(ring, radius: float, angle: float, z: float = 0.0) -> bool:
+    return bool(contains(ring, _points(radius, angle, z))[0])
+
+
+def test_a_full_ring_keeps_the_annulus_and_nothing_else():
+    rays = [[(0.2, 0.7)] * len(HEIGHTS) for _ in ANGLES]
+    ring = ring_from_rays(ANGLES, HEIGHTS, rays, 0.006, 0.01)
+    assert np.array_equal(ring.hole_a, ring.gap_a)  # no gap: the gap repeats the hole
+    for angle in np.linspace(-math.pi, math.pi, 50):
+        assert _inside(ring, 0.23, angle) and _inside(ring, 0.68, angle, 0.1)
+        assert not _inside(ring, 0.2, angle) and not _inside(ring, 0.695, angle) and not _inside(ring, 0.05, angle)
+    assert not _inside(ring, 0.4, 0.0, 0.16) and not _inside(ring, 0.4, 0.0, -0.01)  # the heights measured only
+    # What it keeps of the annulus, counted on a grid: above 95 %.
+    step = 0.004
+    xs = np.arange(-0.72, 0.72, step)
+    grid = np.stack(np.meshgrid(xs, xs), axis=-1).reshape(-1, 2)
+    radius = np.hypot(grid[:, 0], grid[:, 1])
+    annulus = (radius > 0.2) & (radius < 0.7)
+    kept = contains(ring, np.hstack([grid, np.full((len(grid), 1), 0.07)]))
+    assert not np.any(kept & ~annulus)
+    assert np.count_nonzero(kept) / np.count_nonzero(annulus) > 0.95
+
+
+def test_a_ray_without_reach_makes_a_gap_and_only_there():
+    rays = [[(0.2, 0.7)] * len(HEIGHTS) for _ in ANGLES]
+    rays[0] = [None] * len(HEIGHTS)  # straight behind, as a base joint of +-170 degrees
+    ring = ring_from_rays(ANGLES, HEIGHTS, rays, 0.006, 0.01)
+    assert not _inside(ring, 0.5, math.pi) and not _inside(ring, 0.5, math.radians(175))
+    assert _inside(ring, 0.5, math.radians(165)) and _inside(ring, 0.5, math.radians(-165)) and _inside(ring, 0.5, 0.0)
+    assert _inside(ring, 0.25, math.radians(150))
+
+
+def test_reach_within_half_a_turn_is_cut_to_its_angles():
+    rays = [[(0.2, 0.7)] * len(HEIGHTS) if abs(angle) <= math.radians(60) + 1e-9 else [None] * len(HEIGHTS)
+            for angle in ANGLES]
+    ring = ring_from_rays(ANGLES, HEIGHTS, rays, 0.006, 0.01)
+    assert _inside(ring, 0.5, 0.0) and _inside(ring, 0.5, math.radians(55))
+    assert not _inside(ring, 0.5, math.radians(65)) and not _inside(ring, 0.5, math.radians(-90))
+    assert not _inside(ring, 0.1, 0.0)
+
+
+def test_radii_that_change_with_height_are_kept_on_their_safe_side():
+    """Inner radii convex in the height (0.1, 0.1, 0.3) and outer radii that dip (0.7, 0.5, 0.7):
+    no point closer than the interpolated inner radius or farther than the interpolated outer one."""
+    rays = [[(0.1, 0.7), (0.1, 0.5), (0.3, 0.7)] for _ in ANGLES]
+    ring = ring_from_rays(ANGLES, HEIGHTS, rays, 0.0, 0.0)
+    rng = np.random.default_rng(3)
+    points = np.column_stack([rng.uniform(-0.8, 0.8, 20000), rng.uniform(-0.8, 0.8, 20000), rng.uniform(0, 0.15, 20000)])
+    kept = contains(ring, points)
+    radius = np.hypot(points[:, 0], points[:, 1])
+    inner = np.interp(points[:, 2], HEIGHTS, [0.1, 0.1, 0.3])
+    outer = np.interp(points[:, 2], HEIGHTS, [0.7, 0.5, 0.7])
+    assert kept.sum() > 1000
+    assert not np.any(kept & ((radius < inner - 1e-9) | (radius > outer + 1e-9)))
+
+
+def test_no_reach_is_an_error():
+    with pytest.raises(ValueError, match="reaches no sector"):
+        ring_from_rays(ANGLES, HEIGHTS, [[None] * len(HEIGHTS) for _ in ANGLES], 0.006, 0.01)
