@@ -169,7 +169,8 @@ def _geom_rgba(obj, part) -> tuple[float, ...]:
 
 def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dict[str, str]]:
     """Every number (and file path) of the scene's own elements that changes from scene to
-    scene, exactly, by (tag, element name) and attribute: what fills a template's slots."""
+    scene, exactly, by (tag, element name) and attribute: the text that fills a template's
+    slots (numbers need no escaping; paths are escaped here)."""
     exact: dict[tuple[str, str], dict[str, str]] = {}
     for body in bodies:
         obj, inertial = body.obj, body.inertial
@@ -182,11 +183,11 @@ def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dic
             gname = f"{obj.name}/{part.name}"
             stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(_geom_rgba(obj, part))}
             if part.shape == "mesh":
-                exact[("mesh", gname)] = {"file": relative_path(part.mesh, folder), "scale": nums(part.size)}
+                exact[("mesh", gname)] = {"file": _attribute(relative_path(part.mesh, folder)), "scale": nums(part.size)}
             else:
                 stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
             if part.texture is not None:
-                exact[("texture", gname)] = {"file": relative_path(part.texture, folder)}
+                exact[("texture", gname)] = {"file": _attribute(relative_path(part.texture, folder))}
             exact[("geom", gname)] = stamp
         if body.camera is not None:
             exact[("camera", obj.name)] = {"quat": nums(CAMERA_QUAT_NEG_Z), "fovy": num(body.camera.fovy)}
@@ -335,6 +336,11 @@ class _Template:
 _ATTRIBUTE_ESCAPES = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "\n": "&#10;",
                                     "\r": "&#13;", "\t": "&#09;"})
 _templates: dict[tuple, _Template] = {}
+
+
+def _attribute(text: str) -> str:
+    """`text` as an XML attribute value (a file path may hold any of these)."""
+    return text.translate(_ATTRIBUTE_ESCAPES)
 TEMPLATES_KEPT = 64  # topologies a process keeps (a spec has one, or a few with random models)
 
 
@@ -403,7 +409,7 @@ def mjcf_xml(scene: Scene, path: Path, store: AssetStore) -> str:
     values: dict[tuple, str] = {("model",): f"prsc_scene_{scene.index}"}
     for key, attrs in exact.items():
         for attr, value in attrs.items():
-            values[("exact", key, attr)] = value.translate(_ATTRIBUTE_ESCAPES)
+            values[("exact", key, attr)] = value
     qpos: list[str] = []
     ctrl: list[str] = []
     for body in bodies:

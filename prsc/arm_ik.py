@@ -15,6 +15,8 @@ import numpy as np
 POSITION_TOLERANCE = 0.002  # m
 ANGLE_TOLERANCE = 0.02  # rad
 DOWN = np.array([0.0, 0.0, -1.0])
+RESTARTS = 4  # starts drawn within the joint limits where home's fail: a 7-joint arm's IK from
+# home alone misses a third of the points it reaches top-down (KUKA iiwa: 109 of 150 found)
 LIMIT_MARGIN = 0.02  # rad or m kept from every joint limit: a simulated servo held against its
 # limit stops short of it (the limit constraint is soft), so a pose at a limit would miss.
 
@@ -91,7 +93,7 @@ def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarr
     else from `restarts` starts drawn within the joint limits (the same ones every call)."""
     above = goal + np.array([0.0, 0.0, approach])
     bend = np.where(np.arange(len(home)) % 2, 0.5, -0.5)
-    starts = [seed, home, home + bend, home - bend]
+    starts = [seed, home, home + bend, home - bend] if not np.array_equal(seed, home) else [home, home + bend, home - bend]
     if restarts:
         lower = np.where(np.isfinite(arm.lower), arm.lower, home - math.pi)
         upper = np.where(np.isfinite(arm.upper), arm.upper, home + math.pi)

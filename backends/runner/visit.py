@@ -18,7 +18,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from prsc.arm_ik import ArmFrames, reach_top_down, solve_top_down
+from prsc.arm_ik import RESTARTS, ArmFrames, reach_top_down, solve_top_down
 from prsc.assets.articulated import robot_model
 from prsc.backends.names import with_body_names
 from prsc.errors import PrscError
@@ -28,7 +28,6 @@ APPROACH = 0.10  # m above that, reached first
 TOLERANCE = 0.01  # m
 ANGLE = 0.1  # rad
 TIMEOUT = 8.0  # simulated s per point
-RESTARTS = 4  # IK starts within the joint limits when home's fail (as `reachable by` measures the reach)
 
 
 def _robot(scene: dict) -> tuple[dict, object]:

@@ -152,7 +152,7 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     `step` metres: the fraction in the cell, the fraction the IK reaches, and the
     fraction of the reachable ones the cell keeps (and any cell point the IK misses).
     """
-    from prsc.constraints.reach import reach_cell
+    from prsc.constraints.reach import reach_ring
     from prsc.sampling import compile_sampler
 
     scene = compile_sampler(spec).scene(0, 0)
@@ -162,7 +162,7 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     centre, dims = np.asarray(objects[tray]["position"]), np.asarray(objects[tray]["dimensions"])
     half_cube = np.asarray(objects[cube]["dimensions"]) / 2
     z = objects[cube]["position"][2]
-    ring = reach_cell(objects[robot]["model"])
+    ring = reach_ring(objects[robot]["model"])
     reach = TopDownReach()
     xs = np.arange(centre[0] - dims[0] / 2 + half_cube[0], centre[0] + dims[0] / 2 - half_cube[0] + 1e-9, step)
     ys = np.arange(centre[1] - dims[1] / 2 + half_cube[1], centre[1] + dims[1] / 2 - half_cube[1] + 1e-9, step)
@@ -202,7 +202,7 @@ def run(args) -> int:
     import time
 
     from prsc.asset_files import describe_asset
-    from prsc.constraints.arm_reach import HEIGHTS, arm_reach_cell, reach_cache
+    from prsc.constraints.arm_reach import HEIGHTS, arm_reach, reach_cache
     from prsc.errors import PrscError
 
     if not Path(args.arm).is_file():
@@ -215,11 +215,10 @@ def run(args) -> int:
     cached = reach_cache(asset).is_file()
     start = time.process_time()
     try:
-        cell = arm_reach_cell(asset)
+        ring = arm_reach(asset).ring
     except ValueError as error:
         raise PrscError(f"{args.arm}: {error}") from None
     seconds = time.process_time() - start
-    ring = cell.ring
     print(f"{asset.name}: {len(asset.joints)} joints, tool {asset.tcp}; reach of {len(ring.b)} rows less a hole of "
           f"{len(ring.hole_b)} ({'read from the cache' if cached else f'built in {seconds:.1f} s of CPU'}): "
           f"{reach_cache(asset)}")

@@ -19,18 +19,18 @@ import json
 import math
 import os
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from prsc.arm_ik import ArmFrames, reach_top_down
+from prsc.arm_ik import RESTARTS, ArmFrames, reach_top_down
 from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import RING_KEYS, ReachRing, ring_from_rays, ring_json
 
 RECIPE_VERSION = "4"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = 0.12  # m above the point the tool must also reach
-RESTARTS = 4  # starts within the joint limits after home's: a 7-joint arm's IK misses a third of its reach without
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
 STEP = 0.05  # m between radii of the coarse scan
@@ -41,7 +41,7 @@ INNER_MARGIN = 0.01  # m added to the inner radii
 
 
 @dataclass(frozen=True)
-class ReachCell:
+class ArmReach:
     """The reach's rows in the arm's root frame, and the rays they were built from."""
 
     ring: ReachRing
@@ -127,9 +127,7 @@ def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | No
     for restarts in (0, RESTARTS):
         for radius in RADII:
             point = _ray_point(angle, radius, height)
-            q_new, ok = ik.reaches(point, q, restarts if not run else 0)
-            if not ok and run:
-                q_new, ok = ik.reaches(point, q, RESTARTS)
+            q_new, ok = ik.reaches(point, q, RESTARTS if run else restarts)
             if ok:
                 if not run:
                     first_q = q_new
@@ -158,7 +156,7 @@ def ray_angles() -> list[float]:
     return [-math.pi + 2 * math.pi * j / SECTORS for j in range(SECTORS)]
 
 
-def compute_cell(asset: ArticulatedAsset) -> ReachCell:
+def compute_reach(asset: ArticulatedAsset) -> ArmReach:
     """The arm's top-down reach as a ring of exact rows (some seconds of IK)."""
     ik = TopDownIK(asset)
     angles = ray_angles()
@@ -169,22 +167,24 @@ def compute_cell(asset: ArticulatedAsset) -> ReachCell:
     except ValueError as error:
         raise ValueError(f"{error} (rays every {360 // SECTORS} degrees at heights {list(HEIGHTS)} m)") from None
     table = tuple((HEIGHTS[k], angles[j], *(rays[k, j] or (None, None))) for k, j in sorted(rays))
-    return ReachCell(ring, table)  # type: ignore[arg-type]
+    return ArmReach(ring, table)  # type: ignore[arg-type]
 
 
 def reach_cache(asset: ArticulatedAsset) -> Path:
-    """Where an arm's cell is cached: keyed by its file's content and this recipe."""
+    """Where an arm's reach is cached: keyed by its file's content and this recipe."""
     return build_root() / "reach" / f"{asset.key}-v{RECIPE_VERSION}.json"
 
 
-def arm_reach_cell(asset: ArticulatedAsset) -> ReachCell:
-    """The arm's reach, computed on first use and read from the cache after."""
+@lru_cache(maxsize=16)
+def arm_reach(asset: ArticulatedAsset) -> ArmReach:
+    """The arm's reach, computed on first use and read from the cache after (once per process:
+    every scene whose robot moves asks for it three times per `reachable by`)."""
     path = reach_cache(asset)
     if path.is_file():
         data = json.loads(path.read_text(encoding="utf-8"))
         ring = ReachRing(*(np.array(data[key]) for key in RING_KEYS))
-        return ReachCell(ring, tuple(tuple(r) for r in data["rays"]))
-    cell = compute_cell(asset)
+        return ArmReach(ring, tuple(tuple(r) for r in data["rays"]))
+    cell = compute_reach(asset)
     path.parent.mkdir(parents=True, exist_ok=True)
     ring = cell.ring
     atomic_write(path, json.dumps({

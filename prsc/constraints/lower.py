@@ -20,7 +20,8 @@ from prsc.constraints.diagnostics import explain_empty, numeric_failure
 from prsc.constraints.evaluate import Fn
 from prsc.constraints.model import EXCLUSION_KINDS, REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
 from prsc.constraints.orientation import orientation_rule
-from prsc.constraints.position import reach_hole_rules, specifier_rule, workspace_rule
+from prsc.constraints.build import reads_support
+from prsc.constraints.position import specifier_rules, workspace_rule
 from prsc.constraints.specifiers import link_target_error
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
@@ -113,15 +114,13 @@ def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) ->
     rules: list[Rule] = []
     exclusions: list[Rule] = []
     for spec in obj.specifiers:
-        rule = specifier_rule(low, obj, spec, support, me)
-        if rule is not None and rule.kind in EXCLUSION_KINDS:
-            if after:
+        for rule in specifier_rules(low, obj, spec, support, me):
+            if rule.kind not in EXCLUSION_KINDS:
+                rules.append(rule)
+                continue
+            if after and reads_support(rule):  # its cell is eroded by the object's rotated box
                 raise PrscError(_ROTATION_FIRST.format(name=name), spec.span)
             exclusions.append(rule)
-        elif rule is not None:
-            rules.append(rule)
-            if rule.kind == "reachable":
-                exclusions += reach_hole_rules(low, rule, support, me)
     if low.program.workspace is not None:
         rules.append(workspace_rule(low, obj, low.program.workspace, support, me))
     checks: list[RequireCheck] = []

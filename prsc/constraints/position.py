@@ -87,10 +87,12 @@ def template(low: LoweringState, rule: Rule, support: Support | None, me: Object
     return RowTemplate(rows_from_values(rule, values, needs), anchor)
 
 
-def specifier_rule(low: LoweringState, obj: ObjectDecl, spec: ir.Specifier, support: Support | None, me: ObjectValue) -> Rule | None:
-    """The rule of one specifier that sets the position, else None."""
+def specifier_rules(low: LoweringState, obj: ObjectDecl, spec: ir.Specifier, support: Support | None,
+                    me: ObjectValue) -> list[Rule]:
+    """The rules of one specifier that sets the position (none for another): its own, and for
+    `reachable by R` the two cells about R's base it stays out of (EXCLUSION_KINDS)."""
     if "position" not in spec.sets:
-        return None
+        return []
     kind, args, options = _kind_args_options(spec)
     if kind == "stably":
         args, options = args + stack_below(low, args[0]), _declared_mass(low, obj)
@@ -108,10 +110,12 @@ def specifier_rule(low: LoweringState, obj: ObjectDecl, spec: ir.Specifier, supp
         # What the rejection baseline draws from: resting on X (the stack's rows are its test).
         relaxed = _with_template(low, Rule("on", label, spec.span, args[:1], (), None, None, values[:1]), support, me)
         rule = replace(rule, relaxed=relaxed)
-    return rule
+    if kind == "reachable":
+        return [rule, *_reach_hole_rules(low, rule, support, me)]
+    return [rule]
 
 
-def reach_hole_rules(low: LoweringState, rule: Rule, support: Support | None, me: ObjectValue) -> list[Rule]:
+def _reach_hole_rules(low: LoweringState, rule: Rule, support: Support | None, me: ObjectValue) -> list[Rule]:
     """The cells a `reachable by R` rule's object stays out of: the hole about R's base and the gap."""
     return [_with_template(low, Rule("unreachable", rule.label_id, rule.span, rule.args, (("part", part),), None,
                                      rule.soft, rule.values), support, me) for part in (0, 1)]

@@ -28,7 +28,7 @@ DATA = Path(__file__).resolve().parent
 
 
 @functools.lru_cache(maxsize=None)
-def reach_cell(model: str) -> ReachRing | None:
+def reach_ring(model: str) -> ReachRing | None:
     """The model's reach rows in its base frame, or None when prsc has no data for it."""
     path = reach_file(model)
     if not path.is_file():
@@ -50,18 +50,18 @@ def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarra
         raise PrscError("'reachable by' needs a robot object", span)
     model = model_of(robot.props, robot.class_name)
     if names_asset_file(model):
-        from prsc.constraints.arm_reach import arm_reach_cell
+        from prsc.constraints.arm_reach import arm_reach
 
         asset = describe_asset(str(model))
         if not asset.has_joints:
             raise PrscError(f"'reachable by' needs a robot: {robot.name}'s model {asset.name!r} has no joints", span)
         try:
-            ring = arm_reach_cell(asset).ring
+            ring = arm_reach(asset).ring
         except ValueError as error:
             raise PrscError(f"'reachable by' {robot.name}: {error}", span) from None
         offset = np.array(asset.root_offset)
     else:
-        found = reach_cell(model) if isinstance(model, str) else None
+        found = reach_ring(model) if isinstance(model, str) else None
         if found is None:
             raise PrscError(f"'reachable by' needs a robot (the Panda, or an arm from a URDF or MJCF file: "
                             f"docs/assets.md); {robot.name}'s model is {model!r}", span)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from prsc.constraints import lower_program
-from prsc.constraints.reach import reach_cell, reach_file
+from prsc.constraints.reach import reach_ring, reach_file
 from prsc.errors import PrscError
 from prsc.geometry.polytope import Polytope
 from prsc.constraints.reach_ring import contains, ring_json
@@ -48,7 +48,7 @@ def test_the_cell_is_what_the_script_derives_from_its_ik_rays():
 
 
 def test_points_in_the_ring_are_reached_top_down_and_points_past_it_are_not(arm):
-    ring = reach_cell("panda")
+    ring = reach_ring("panda")
     a, b = ring.a, ring.b
     candidates = _points(a, b, 60, seed=1)
     inside = candidates[contains(ring, candidates)][:12]
@@ -84,7 +84,7 @@ def test_reachable_cubes_are_sampled_exactly_inside_the_cell_and_fill_it():
     # r1 is fixed: the rule's rows are static, and the cube's region still moves with its tray.
     assert rule.static and c1.region.anchor == "tr_1"
     sampler = Sampler(program, "exact")
-    ring = reach_cell("panda")
+    ring = reach_ring("panda")
     inside, local = 0, []
     for index in range(300):
         result = sampler.sample(11, index)
