@@ -17,7 +17,8 @@ model and its data:
 
 A scene the shared model cannot express is an error naming the object and why: another
 set of objects, another shape, model or part layout, a mesh whose size changes (a mesh's
-scale is baked into its vertices), or a robot from another file.
+scale is baked into its vertices), another image (`with texture Options(...)`: the image is
+compiled into the model's texture data), or a robot from another file.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from prsc.backends.bodies import Body, resolve_bodies
-from prsc.backends.mjcf import RobotFragment, _geom_size, robot_fragment
+from prsc.backends.mjcf import RobotFragment, _geom_rgba, _geom_size, robot_fragment
 from prsc.backends.scene import parse_scene, scene_position, unit_quaternion
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
@@ -39,14 +40,14 @@ from prsc.errors import PrscError
 class _Layout:
     """What must be equal between two scenes for one model to hold both."""
 
-    objects: tuple[tuple[Any, ...], ...]  # per object: name, fixed, robot key, parts' (name, shape, mesh)
+    objects: tuple[tuple[Any, ...], ...]  # per object: name, fixed, robot key, camera, parts' (name, shape, mesh, ..., texture)
 
     @staticmethod
     def of(bodies: tuple[Body, ...]) -> "_Layout":
         """The layout of resolved bodies."""
         return _Layout(tuple(
             (b.name, b.fixed, b.robot.key if b.robot else None, b.camera is not None,
-             tuple((p.name, p.shape, p.mesh, p.collides, p.visible) for p in b.parts))
+             tuple((p.name, p.shape, p.mesh, p.collides, p.visible, p.texture) for p in b.parts))
             for b in bodies
         ))
 
@@ -69,8 +70,19 @@ def _difference(old: _Layout, new: _Layout) -> str:
         shapes_after = [p[:2] for p in after[4]]
         if shapes_before != shapes_after:
             return f"object {name!r} has other parts or shapes ({shapes_after}) than in the model ({shapes_before})"
+        images_before = [p[5] for p in before[4]]
+        images_after = [p[5] for p in after[4]]
+        if images_before != images_after:
+            # An image is compiled into the model's texture data, like a mesh's vertices.
+            return (f"object {name!r} shows another image ({_names(images_after)}) than in the model "
+                    f"({_names(images_before)}); a shared model cannot change a texture: compile each scene")
         return f"object {name!r}'s parts differ from the model's ({after[4]} vs {before[4]})"
     return "its layout differs"  # pragma: no cover - equal layouts are not compared
+
+
+def _names(images: list[str | None]) -> str:
+    """The file names of parts' images, for an error."""
+    return ", ".join(Path(i).name if i else "none" for i in images)
 
 
 def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
@@ -191,7 +203,7 @@ class SharedModel:
             g = model.geom(f"{obj.name}/{part.name}").id
             model.geom_pos[g] = part.position
             model.geom_quat[g] = part.quaternion
-            model.geom_rgba[g] = obj.color
+            model.geom_rgba[g] = _geom_rgba(obj, part)
             if part.shape == "mesh":
                 self._check_mesh_scale(obj.name, part.name, np.array(part.size))
                 continue

@@ -17,6 +17,8 @@ ANGLE_TOLERANCE = 0.02  # rad
 DOWN = np.array([0.0, 0.0, -1.0])
 RESTARTS = 4  # starts drawn within the joint limits where home's fail: a 7-joint arm's IK from
 # home alone misses a third of the points it reaches top-down (KUKA iiwa: 109 of 150 found)
+STALL_ITERATIONS = 20  # a solve whose error has not fallen by STALL_GAIN in this many steps has stalled
+STALL_GAIN = 0.01  # (at a joint limit or a singular pose); most failing solves stall, and ran 80 steps
 LIMIT_MARGIN = 0.02  # rad or m kept from every joint limit: a simulated servo held against its
 # limit stops short of it (the limit constraint is soft), so a pose at a limit would miss.
 
@@ -66,6 +68,7 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
     jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
     horizontal = np.eye(3) - np.outer(DOWN, DOWN)  # turning about the vertical keeps a top-down pose
     q = np.clip(np.array(q, float), arm.lower, arm.upper)
+    best, since_best = math.inf, 0
     for _ in range(iterations):
         data.qpos[arm.qpos] = q
         mujoco.mj_kinematics(model, data)
@@ -73,8 +76,16 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
         position, rotation = arm.tool_pose(data)
         error_p = goal - position
         axis = rotation[:, 2]
-        if np.linalg.norm(error_p) < POSITION_TOLERANCE and math.acos(min(1.0, -axis[2])) < ANGLE_TOLERANCE:
+        tilt = math.acos(min(1.0, max(-1.0, -axis[2])))
+        distance = float(np.linalg.norm(error_p)) + tilt
+        if distance - tilt < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE:
             return q, True
+        if distance < best * (1 - STALL_GAIN):
+            best, since_best = distance, 0
+        else:
+            since_best += 1
+            if since_best == STALL_ITERATIONS:
+                return q, False
         if arm.tool_is_site:
             mujoco.mj_jacSite(model, data, jacp, jacr, arm.tool)
         else:

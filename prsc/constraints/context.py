@@ -22,7 +22,7 @@ class SceneContext:
     values drawn while placing objects k, k+1, ...
     """
 
-    __slots__ = ("rng", "_buffer", "draws", "variables", "objects", "journal", "level", "active_requires", "proposal")
+    __slots__ = ("rng", "_buffer", "draws", "variables", "objects", "journal", "level", "active_requires", "proposal", "prepared")
 
     def __init__(self, rng: np.random.Generator) -> None:
         self.rng = rng
@@ -35,6 +35,9 @@ class SceneContext:
         self.active_requires: frozenset[int] = frozenset()
         # A falsification proposal's per-scene state (prsc/sampling/proposal.py), or None: the spec's law.
         self.proposal: Any = None
+        # The sampler's regions prepared in this scene, by the sampling stage's own keys
+        # (prsc/sampling/regions.py): kept with the scene, so threads sharing a sampler never mix them.
+        self.prepared: dict[Any, Any] = {}
 
     def uniform(self) -> float:
         """A uniform draw from [0, 1)."""

@@ -61,6 +61,9 @@ DEFAULT_SWEEPS = 4
 # A group move either lets the dependants follow k (the measure ratio decides) or, with this
 # probability, draws them afresh on their free space (the ratio of free fractions decides).
 # Following moves a tray with its cubes; redrawing moves cups that share a coordinate with k.
+# A group whose dependants are all carried by a member (`_carried`) only follows: there the
+# redraw costs two free-space decompositions per dependant and the follow is already
+# accepted whenever k's new place is free (docs/sampling.md).
 REDRAW = 0.5
 
 
@@ -108,8 +111,22 @@ class GibbsSweeps:
                         and not any(engine.runtimes[j].plan.exclusions for j in self.groups[k][1:])]
         self.has_checks = any(engine.checks)
         # Fresh draws of a group need every dependant's rotation before its position.
-        self.redraw = [all(not engine.runtimes[j].after_position for j in g[1:]) for g in self.groups]
+        # The probability of a redraw move per group (a constant per spec: either kernel alone
+        # keeps the joint law, so the mixture does for any fixed weights).
+        self.redraw = [REDRAW if all(not runtimes[j].after_position for j in g[1:])
+                       and not all(self._carried(j, g) for j in g[1:]) else 0.0 for g in self.groups]
         self._fixed_bounds()
+
+    def _carried(self, j: int, group: tuple[int, ...]) -> bool:
+        """Whether dependant j moves rigidly with a member of its group and meets nothing outside
+        it on the way: it rests inside a member (a part in a bin, a cube on a tray's floor), or
+        its region is a translate of one fixed region anchored to a member (a camera above a bin)."""
+        rt = self.engine.runtimes[j]
+        if any(m in group for m in rt.plan.rests_in):
+            return True
+        anchor = rt.plan.region.anchor
+        return (anchor is not None and self.engine.index_of.get(anchor) in group
+                and rt.support is not None and rt.provider.fixed_bounds() is not None)
 
     # ------------------------------------------------------------ detection
     def _fixed_bounds(self) -> None:
@@ -207,14 +224,14 @@ class GibbsSweeps:
         half = _half(obj)
         members = [ctx.objects[runtimes[j].plan.name] for j in group]
         saved = [(o.position.copy(), o.rotation) for o in members]  # type: ignore[union-attr]
-        redraw = len(group) > 1 and self.redraw[k] and ctx.uniform() < REDRAW
+        redraw = len(group) > 1 and self.redraw[k] > 0 and ctx.uniform() < self.redraw[k]
         old = None if redraw else self._centres(group[1:], run)
         if not redraw and old is None:
             return False
         ctx.level = k
         support = _support(rt, obj.rotation, half)
         try:
-            region, shift = rt.provider.region(ctx, support, rt.support is not None)
+            region, shift = rt.provider.region(ctx, support, rt.support is not None, translates=True)
         except EmptyRegionError:
             return False
         outside = [boxes[i] for i in range(len(boxes)) if i not in group]
@@ -238,7 +255,7 @@ class GibbsSweeps:
         rt = self.engine.runtimes[j]
         o = run.ctx.objects[rt.plan.name]
         run.ctx.level = j
-        return rt.provider.region(run.ctx, _support(rt, o.rotation, _half(o)), rt.support is not None)
+        return rt.provider.region(run.ctx, _support(rt, o.rotation, _half(o)), rt.support is not None, translates=True)
 
     def _redraw(self, group: tuple[int, ...], saved: list, run: Attempt) -> bool:
         """Draw the dependants afresh, one by one exactly uniform on what is free, given k's new
@@ -269,16 +286,21 @@ class GibbsSweeps:
             half = _half(o)
             try:
                 region, shift = self._region(j, run)
-                poly = region.poly if shift is None else region.poly.translate(shift)
                 lo, hi = (region.lo, region.hi) if shift is None else (region.lo + shift, region.hi + shift)
                 reach = rt.reach if rt.reach is not None else aabb_reach(o.rotation, half)
                 nearby = near(fixed, lo, hi, reach, containers=rt.plan.rests_in)
-                free = free_space_sampler(poly, obstacles_for(nearby, o.rotation, half))  # type: ignore[arg-type]
+                if nearby:
+                    poly = region.poly if shift is None else region.poly.translate(shift)
+                    free = free_space_sampler(poly, obstacles_for(nearby, o.rotation, half))  # type: ignore[arg-type]
             except EmptyRegionError:
                 return None
-            factor *= free.measure / region.measure
-            if draw:
-                o.position = free.sample_one(ctx.rng)
+            if nearby:
+                factor *= free.measure / region.measure
+                if draw:
+                    o.position = free.sample_one(ctx.rng)
+            elif draw:  # nothing can reach its region: F_j is R_j, drawn without a decomposition
+                p = region.draw(ctx.rng, "exact", 0)
+                o.position = p if shift is None else p + shift
             fixed.append(rt.placed_box(o, half, ctx))
         return factor
 

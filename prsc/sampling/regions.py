@@ -9,7 +9,10 @@ Three cases, decided by the constraint stage:
   directly, anything else is prepared (vertex enumeration + triangulation), with a
   small cache on the exact rows.
 The sample is a function of the scene's rows and random stream only, never of which
-scenes filled a cache first.
+scenes filled a cache first. Gibbs sweeps (gibbs.py) also ask for `translates`: rows that
+are a translate of rows prepared earlier in the same scene (a part's region in a bin that
+moved) reuse that preparation, shifted; the cache lives in the scene's context
+(`SceneContext.prepared`), so the sample is still a function of the scene alone.
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ from prsc.geometry.sampler import UniformSampler, prepare_sampler
 
 TOL = 1e-9  # metres: feasibility tolerance of a point against its rows
 _CACHE_SIZE = 256
+_TRANSLATES = 4  # preparations kept per row directions and scene (tried in order)
+_SLACK = 1e-7  # metres: a row within this of a vertex counts as tight there
 
 
 class Prepared:
@@ -123,6 +128,41 @@ def _satisfies(
     return True
 
 
+class _Translatable:
+    """A region prepared in this scene, and which of its rows are tight at a vertex."""
+
+    __slots__ = ("prepared", "b", "d", "tight", "directions", "slack_rows", "slack_at_vertices")
+
+    def __init__(self, prepared: Prepared, b: np.ndarray, d: np.ndarray, tight: np.ndarray,
+                 directions: np.ndarray, slack_rows: np.ndarray, slack_at_vertices: np.ndarray) -> None:
+        self.prepared, self.b, self.d, self.tight = prepared, b, d, tight
+        self.directions, self.slack_rows, self.slack_at_vertices = directions, slack_rows, slack_at_vertices
+
+    @staticmethod
+    def of(poly: Polytope, prepared: Prepared) -> "_Translatable":
+        """The rows of `poly` sorted into tight (at some vertex of `prepared`) and slack."""
+        vertices = prepared.point[None, :] if prepared.point is not None else prepared.sampler.vertices()  # type: ignore[union-attr]
+        norms = np.maximum(np.linalg.norm(poly.A, axis=1), 1.0)
+        tight = np.any(poly.A @ vertices.T >= (poly.b - _SLACK * norms)[:, None], axis=1)
+        slack = ~tight
+        return _Translatable(prepared, poly.b, poly.d, tight, np.vstack([poly.A[tight], poly.C]),
+                             poly.A[slack], poly.A[slack] @ vertices.T)
+
+    def shift_to(self, poly: Polytope) -> np.ndarray | None:
+        """t such that `poly`'s region is this one's plus t, or None."""
+        offsets = np.concatenate([(poly.b - self.b)[self.tight], poly.d - self.d])
+        if len(offsets):
+            shift = np.linalg.lstsq(self.directions, offsets, rcond=None)[0]
+            if np.any(np.abs(self.directions @ shift - offsets) > TOL):
+                return None
+        else:
+            shift = np.zeros(poly.A.shape[1])
+        slack = ~self.tight
+        if np.any(self.slack_at_vertices + (self.slack_rows @ shift)[:, None] >= (poly.b[slack] - TOL)[:, None]):
+            return None  # a slack row of `poly` would cut the translated region
+        return shift
+
+
 class RegionProvider:
     """The feasible region of one object in one scene (before collisions)."""
 
@@ -167,8 +207,11 @@ class RegionProvider:
             return Polytope.everything()
         return intersect(*polys)
 
-    def region(self, ctx: SceneContext, support: Support, support_static: bool) -> tuple[Prepared, np.ndarray | None]:
-        """(prepared region, translation to add to its draws or None); EmptyRegionError if empty."""
+    def region(self, ctx: SceneContext, support: Support, support_static: bool,
+               translates: bool = False) -> tuple[Prepared, np.ndarray | None]:
+        """(prepared region, translation to add to its draws or None); EmptyRegionError if empty.
+        With `translates`, per-scene rows that translate rows prepared earlier in this scene reuse them."""
+        general = (lambda poly: self._translated(poly, ctx)) if translates else (lambda poly: (self._general(poly), None))
         if not self.dynamic and support_static:
             if self._static is None:
                 self._static = prepare(self.static_rows if self.static_rows is not None else Polytope.everything())
@@ -182,7 +225,7 @@ class RegionProvider:
             polys = [self.plan.anchored_rows.translate(shift)]
             if self.static_rows is not None:
                 polys.append(self.static_rows)
-            return self._general(intersect(*polys)), None
+            return general(intersect(*polys))
         if support_static:
             active = [r for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
             dynamic = [rule_rows(r, ctx, support) for r in active]
@@ -197,10 +240,10 @@ class RegionProvider:
                     raise _empty(intersect(*dynamic, *([] if self.static_rows is None else [self.static_rows])))
                 return Prepared(dynamic[which], None, point), None
             polys = dynamic if self.static_rows is None else [self.static_rows, *dynamic]
-            return self._general(intersect(*polys) if polys else Polytope.everything()), None
+            return general(intersect(*polys) if polys else Polytope.everything())
         # The object's own size or rotation is random: every rule is rebuilt.
         polys = [rule_rows(r, ctx, support) for r in self.plan.rules if r.soft is None or r.soft in ctx.active_requires]
-        return self._general(intersect(*polys) if polys else Polytope.everything()), None
+        return general(intersect(*polys) if polys else Polytope.everything())
 
     def fixed_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Bounds of the region in every scene (relative to the anchor's position when anchored),
@@ -250,6 +293,25 @@ class RegionProvider:
             verts = a.point[None, :] if a.point is not None else a.sampler.vertices()  # type: ignore[union-attr]
             an = np.maximum(np.linalg.norm(s.A, axis=1), 1.0)
             self._slack = (s.A @ verts.T, s.b - TOL * an)
+
+    def _translated(self, poly: Polytope, ctx: SceneContext) -> tuple[Prepared, np.ndarray | None]:
+        """(prepared, shift): a preparation of this scene whose region `poly`'s is, translated by
+        `shift`, else `poly` prepared (and remembered for this scene).
+
+        The region P of rows (A, b0, C, d0) is the region of its rows tight at some vertex
+        (a row slack at every vertex of a bounded polytope cuts nothing). So rows (A, b1, C, d1)
+        give P + t when the tight rows and the equalities move by t (b1 = b0 + A t) and the
+        slack rows stay slack at every vertex of P + t, a workspace's far walls for instance."""
+        key = (id(self), poly.A.tobytes(), poly.C.tobytes())
+        seen = ctx.prepared.setdefault(key, [])
+        for known in seen:
+            shift = known.shift_to(poly)
+            if shift is not None:
+                return known.prepared, shift
+        prepared = self._general(poly)
+        if len(seen) < _TRANSLATES:
+            seen.append(_Translatable.of(poly, prepared))
+        return prepared, None
 
     def _general(self, poly: Polytope) -> Prepared:
         """Prepare per-scene rows, reusing an identical earlier preparation."""

@@ -6,7 +6,7 @@ recompiling (`scenario.apply`), and `prsc.SceneEnv`, a Gymnasium environment on 
   key, what mj_setConst derives) equals a freshly compiled model's, and so do the body
   poses after mj_forward (<= 1e-9 m);
 - a scene the shared model cannot hold (another set of objects, another shape, a mesh of
-  another size) is an error naming the object;
+  another size, another image) is an error naming the object;
 - Gymnasium's own env checker passes, and Sync and Async vector environments run;
 - the example in examples/ runs as written.
 """
@@ -84,6 +84,31 @@ def test_a_mesh_whose_size_changes_is_refused():
     with pytest.raises(PrscError, match="object 'small' is a mesh whose size changes"):
         for index in range(1, 5):
             scenario.apply(scenario.scene(0, index), model, data)
+
+
+def test_a_texture_that_changes_is_refused_and_a_kept_one_shows_white(tmp_path):
+    from PIL import Image
+
+    for name, colour in (("red.png", (200, 0, 0)), ("green.png", (0, 200, 0))):
+        Image.fromarray(np.full((8, 8, 3), colour, np.uint8)).save(tmp_path / name)
+    (tmp_path / "crates.prs").write_text(
+        'from tabletop import *\nt = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75\n'
+        'crate = Cube completely on t, with texture Options(["red.png", "green.png"])\n')
+    scenario = prsc.load(tmp_path / "crates.prs")
+    model = scenario.model(0, 0)
+    data = mujoco.MjData(model)
+    texture = lambda scene: next(o for o in scene["objects"] if o["name"] == "crate")["properties"]["texture"]
+    scenes = [scenario.scene(0, index) for index in range(12)]  # the model's own scene first
+    first = texture(scenes[0])
+    same = [s for s in scenes if texture(s) == first]
+    other = [s for s in scenes if texture(s) != first]
+    assert len(same) >= 2 and other  # both images are drawn in 12 scenes
+    for scene in same:
+        scenario.apply(scene, model, data)
+        fresh = prsc.mujoco_model(scene)
+        assert np.array_equal(model.geom_rgba, fresh.geom_rgba)  # the textured box is white, as compiled
+    with pytest.raises(PrscError, match=f"object 'crate' shows another image .*{texture(other[0])[:-4]}"):
+        scenario.apply(other[0], model, data)
 
 
 gymnasium = pytest.importorskip("gymnasium")
