@@ -55,8 +55,9 @@ class Visit:
         """One episode: the outcome, why, and the worst distance of the tool from a point."""
         robot, asset = _robot(scene)
         prefix = f"{robot['body']}/"
+        tool = (robot.get("properties") or {}).get("tcp") or asset.tcp  # the spec's `with tcp`, else the file's
         arm = ArmFrames.of(model, [prefix + j.name for j in asset.joints if j.name in _arm_joints(model, prefix, asset)],
-                           prefix + str(asset.tcp))
+                           prefix + str(tool))
         servos = _servos(model, arm)
         home = data.qpos[arm.qpos].copy()
         scratch = mujoco.MjData(model)

@@ -27,7 +27,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -195,6 +195,8 @@ def add_parser(sub) -> None:
     parser.add_argument("--grid", type=float, default=0.03, metavar="M",
                         help="the step of the grid the true reach is measured on (default 0.03 m)")
     parser.add_argument("--plot", metavar="PNG", help="draw the true reach and the ring at the root's height into PNG")
+    parser.add_argument("--tcp", metavar="NAME", help="the tool frame, as a spec's `with tcp` names it (a link, body or "
+                        "site; default: a site named tcp, else the last link of the longest chain)")
 
 
 def run(args) -> int:
@@ -212,6 +214,10 @@ def run(args) -> int:
     asset = describe_asset(args.arm, args.include)
     if not asset.has_joints:
         raise PrscError(f"{args.arm} has no joints: not an arm")
+    if args.tcp is not None:
+        if args.tcp not in (*asset.links, *asset.sites):
+            raise PrscError(f"--tcp {args.tcp!r} is no link or site of {args.arm}")
+        asset = replace(asset, tcp=args.tcp)
     cached = reach_cache(asset).is_file()
     start = time.process_time()
     try:

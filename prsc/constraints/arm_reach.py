@@ -1,7 +1,8 @@
 """`reachable by R` for an arm from a file (docs/assets.md): the points its tool reaches
 top-down, computed from the arm's own kinematics as a ring of exact rows (an outer convex
-cell less a hole and a gap, prsc/constraints/reach_ring.py) and cached by the file's content in
-the build folder (`$PRSC_BUILD_DIR/reach/<key>.json`), so a second compile costs nothing.
+cell less a hole and a gap, prsc/constraints/reach_ring.py) and cached by the file's content
+and tool frame in the build folder (`$PRSC_BUILD_DIR/reach/<key>-<tool>-v<recipe>.json`), so a
+second compile costs nothing.
 
 Top-down means the tool frame's +z (the flange normal of a URDF arm's last link, or the
 `tcp` site's z) points straight down, any yaw. A point counts as reached when a damped
@@ -15,9 +16,11 @@ no less than at the nearer of them, less the margin.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 import os
+import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -171,8 +174,10 @@ def compute_reach(asset: ArticulatedAsset) -> ArmReach:
 
 
 def reach_cache(asset: ArticulatedAsset) -> Path:
-    """Where an arm's reach is cached: keyed by its file's content and this recipe."""
-    return build_root() / "reach" / f"{asset.key}-v{RECIPE_VERSION}.json"
+    """Where an arm's reach is cached: keyed by its file's content, its tool frame and this recipe."""
+    tool = str(asset.tcp)
+    tag = re.sub(r"[^A-Za-z0-9_.-]", "_", tool)[:40] + "-" + hashlib.sha256(tool.encode()).hexdigest()[:6]
+    return build_root() / "reach" / f"{asset.key}-{tag}-v{RECIPE_VERSION}.json"
 
 
 @lru_cache(maxsize=16)

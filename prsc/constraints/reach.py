@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +56,9 @@ def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarra
         asset = describe_asset(str(model))
         if not asset.has_joints:
             raise PrscError(f"'reachable by' needs a robot: {robot.name}'s model {asset.name!r} has no joints", span)
+        tool = robot.props.get("tcp")
+        if isinstance(tool, str) and tool != asset.tcp:
+            asset = replace(asset, tcp=tool)  # the spec's tool frame (`with tcp "link"`): its own reach
         try:
             ring = arm_reach(asset).ring
         except ValueError as error:

@@ -291,3 +291,53 @@ def test_the_example_controller_drives_every_arm_by_its_own_names(arm_output, tm
     records = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
     assert [r["outcome"] for r in records] == ["visited"] * 3, records
     assert max(r["worst"] for r in records) < 0.01
+
+
+def test_a_spec_tcp_has_its_own_reach_and_the_controller_drives_it(tmp_path):
+    """`with tcp "wrist"` (the wrist body, 5 cm behind the file's `tcp` site): `reachable by`
+    is built for that frame, cached apart from the site's, and the cubes are reached
+    top-down by the wrist; the example controller `visit` drives the wrist."""
+    import mujoco
+
+    from prsc.asset_files import build_root, describe_asset
+
+    (tmp_path / "arm.xml").write_text(MJCF_ARM)
+    spec = _spec(tmp_path, "arm.xml", 'with tcp "wrist"')
+    out = tmp_path / "out"
+    done = _prsc("compile", str(spec), "-n", str(REACH_SCENES), "--target", "json,mjcf", "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    stem = describe_asset(str(tmp_path / "arm.xml")).key
+    tools = sorted(p.name[len(stem) + 1:].split("-")[0] for p in (build_root() / "reach").glob(f"{stem}-*.json"))
+    assert "wrist" in tools, tools  # built for the wrist (the site's own reach may be there from the other tests)
+    for k in range(REACH_SCENES):
+        scene = json.loads((out / "arm" / "json" / f"{k:05d}.json").read_text())
+        assert _arm(scene)["properties"]["tcp"] == "wrist"
+        asset = describe_asset(_arm(scene)["model"])
+        model = mujoco.MjModel.from_xml_path(str(out / "arm" / "mjcf" / f"{k:05d}.xml"))
+        data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        tool = model.body("arm/wrist").id
+        qadr = np.array([model.jnt_qposadr[model.joint(f"arm/{j.name}").id] for j in asset.joints])
+        for cube in (o for o in scene["objects"] if o["name"].startswith("c")):
+            target = np.array(cube["position"])
+            q = _top_down_ik(model, data, tool, False, qadr, target, np.array([j.home for j in asset.joints]))
+            data.qpos[qadr] = q
+            mujoco.mj_kinematics(model, data)
+            axis = data.xmat[tool].reshape(3, 3)[:, 2]
+            error, angle = np.linalg.norm(data.xpos[tool] - target), np.arccos(min(1.0, -axis[2]))
+            assert error < 0.005 and angle < 0.05, f"scene {k} {cube['name']}: {error * 1000:.1f} mm, {angle:.3f} rad"
+    # The example controller drives the same frame: after its run, the wrist (not the site
+    # 5 cm beyond it) stands at the point above the last cube.
+    from prsc.backends.runner.visit import HOVER, visit
+
+    scene = json.loads((out / "arm" / "json" / "00000.json").read_text())
+    model = mujoco.MjModel.from_xml_path(str(out / "arm" / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    record = visit(scene, model, data)
+    assert record["outcome"] == "visited", record
+    last = [o for o in scene["objects"] if o["name"].startswith("c")][-1]
+    point = np.array(last["position"]) + [0.0, 0.0, HOVER]
+    assert np.linalg.norm(data.body("arm/wrist").xpos - point) < 0.01
+    assert np.linalg.norm(data.site("arm/tcp").xpos - point) > 0.04

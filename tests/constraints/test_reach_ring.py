@@ -77,3 +77,16 @@ def test_radii_that_change_with_height_are_kept_on_their_safe_side():
 def test_no_reach_is_an_error():
     with pytest.raises(ValueError, match="reaches no sector"):
         ring_from_rays(ANGLES, HEIGHTS, [[None] * len(HEIGHTS) for _ in ANGLES], 0.006, 0.01)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--tcp", "nope"], "--tcp 'nope' is no link or site of"),
+    (["--grid", "0"], "--grid must be a step > 0 m"),
+])
+def test_prsc_reach_refuses_a_bad_tool_or_grid(tmp_path, capsys, args, message):
+    from prsc.cli import main
+    from tests.assets.test_user_arms import MJCF_ARM
+
+    (tmp_path / "arm.xml").write_text(MJCF_ARM)
+    assert main(["reach", str(tmp_path / "arm.xml"), *args]) == 2
+    assert message in capsys.readouterr().err
