@@ -54,11 +54,7 @@ def worker_count(jobs: int) -> int:
 
 # ------------------------------------------------------------------ local processes
 
-_worker_fn: Callable[[Any, Any], Any] | None = None
-_worker_shared: Any = None
-
-
-BATCH_PER_WORKER = 32  # items handed out per worker and batch: the task queue stays bounded
+BATCH_PER_WORKER = 32  # items handed out per worker and batch: what is pending stays bounded
 
 
 def _die_with_parent(parent: int) -> None:
@@ -69,23 +65,107 @@ def _die_with_parent(parent: int) -> None:
         libc = ctypes.CDLL(None, use_errno=True)
         PR_SET_PDEATHSIG = 1
         libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
-    except (OSError, AttributeError):  # not Linux: the pool's own shutdown still applies
+    except (OSError, AttributeError):  # not Linux: the parent's own shutdown still applies
         pass
     if os.getppid() != parent:  # the parent died before prctl took effect
         os._exit(1)
 
 
-def _local_init(fn: Callable[[Any, Any], Any], shared: Any, parent: int) -> None:
-    global _worker_fn, _worker_shared
-    # Ctrl-C reaches the whole process group: the parent alone reports it and stops the pool.
+def _worker_main(connection: Any, fn: Callable[[Any, Any], Any], shared: Any, parent: int) -> None:
+    """A local worker: chunks of (number, item) in, [(number, result)] or ("error", exception) out."""
+    # Ctrl-C reaches the whole process group: the parent alone reports it and stops the workers.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # Pool.terminate() must end a worker
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _die_with_parent(parent)
-    _worker_fn, _worker_shared = fn, shared
+    while True:
+        try:
+            chunk = connection.recv()
+        except EOFError:  # the parent closed its end: nothing more to do
+            return
+        if chunk is None:
+            return
+        try:
+            answer: Any = ("ok", [(number, fn(shared, item)) for number, item in chunk])
+        except BaseException as error:  # the parent raises it, as Pool did
+            answer = ("error", error)
+        try:
+            connection.send(answer)
+        except Exception as error:  # an exception or result that does not pickle
+            connection.send(("error", PrscError(f"a worker's answer could not be sent back: {error}")))
 
 
-def _local_call_chunk(numbered: list[tuple[int, Any]]) -> list[tuple[int, Any]]:
-    return [(number, _worker_fn(_worker_shared, item)) for number, item in numbered]
+class _Workers:
+    """Local worker processes, each with a pipe of its own to the parent.
+
+    No lock or queue is shared between workers (multiprocessing.Pool shares two): a worker
+    killed anywhere, by the parent's stop or by the system, leaves nothing the others or
+    the parent wait for. Pool.terminate() could wait forever for a queue lock that a worker
+    it had just killed still held, and a compile then never ended after SIGTERM."""
+
+    def __init__(self, context: Any, count: int, fn: Callable[[Any, Any], Any], shared: Any) -> None:
+        self.processes: list[Any] = []
+        self.connections: list[Any] = []
+        for _ in range(count):
+            mine, theirs = context.Pipe()
+            process = context.Process(target=_worker_main, args=(theirs, fn, shared, os.getpid()), daemon=True)
+            process.start()
+            theirs.close()
+            self.processes.append(process)
+            self.connections.append(mine)
+
+    def run(self, chunks: Iterable[list[tuple[int, Any]]], on_chunk: Callable[[list[tuple[int, Any]]], None],
+            check: Callable[[], None]) -> None:
+        """Hand each worker one chunk at a time until `chunks` run out; `on_chunk` sees each
+        answer; `check` runs between answers (it may raise to stop)."""
+        from multiprocessing.connection import wait
+
+        pending = iter(chunks)
+        busy: dict[Any, Any] = {}
+        for connection, process in zip(self.connections, self.processes):
+            chunk = next(pending, None)
+            if chunk is None:
+                break
+            connection.send(chunk)
+            busy[connection] = process
+        while busy:
+            check()
+            for connection in wait(list(busy), timeout=SIGNAL_POLL):
+                try:
+                    kind, answer = connection.recv()
+                except EOFError:
+                    process = busy[connection]
+                    process.join(timeout=1.0)
+                    raise PrscError(f"a worker process ended unexpectedly (exit code {process.exitcode}); "
+                                    "the system may have run out of memory") from None
+                if kind == "error":
+                    raise answer
+                chunk = next(pending, None)
+                if chunk is None:
+                    del busy[connection]
+                else:
+                    connection.send(chunk)
+                on_chunk(answer)
+
+    def close(self) -> None:
+        """Let every worker finish and end (their CPU time then counts as this process's children's)."""
+        for connection in self.connections:
+            try:
+                connection.send(None)
+            except OSError:
+                pass
+        for process in self.processes:
+            process.join()
+        for connection in self.connections:
+            connection.close()
+
+    def kill(self) -> None:
+        """End every worker at once (SIGKILL): nothing of theirs can keep the parent waiting."""
+        for process in self.processes:
+            process.kill()
+        for process in self.processes:
+            process.join()
+        for connection in self.connections:
+            connection.close()
 
 
 @dataclass(frozen=True)
@@ -99,64 +179,51 @@ class LocalExecutor:
     start: str = "spawn"
 
     def map(self, fn, shared, items, on_result=None):
-        """Run the items here (jobs 1) or in a process pool; results in item order."""
+        """Run the items here (jobs 1) or in worker processes; results in item order."""
         pending = iter(items)
-        results: list[Any] = []
         batch = list(itertools.islice(pending, self.jobs * BATCH_PER_WORKER))
         if self.jobs <= 1 or len(batch) <= 1:
+            results: list[Any] = []
             for item in itertools.chain(batch, pending):
                 results.append(fn(shared, item))
                 if on_result is not None:
                     on_result(results[-1])
             return results
         method = self.start if self.start in multiprocessing.get_all_start_methods() else "spawn"
-        context = multiprocessing.get_context(method)
+        # One item per message for spawn (each may be a long episode); small chunks for fork.
+        size = 1 if method == "spawn" else max(1, min(16, len(batch) // (self.jobs * 8)))
+        numbered = enumerate(itertools.chain(batch, pending))
+        chunks = iter(lambda: list(itertools.islice(numbered, size)), [])
+        answers: dict[int, Any] = {}
+
+        def record(chunk: list[tuple[int, Any]]) -> None:
+            for number, result in chunk:
+                answers[number] = result
+                if on_result is not None:
+                    on_result(result)
+
         with _DeferredSignals() as signals:
-            pool = context.Pool(min(self.jobs, len(batch)), initializer=_local_init,
-                                initargs=(fn, shared, os.getpid()))
+            workers = _Workers(multiprocessing.get_context(method), min(self.jobs, len(batch)), fn, shared)
             try:
-                while batch:
-                    # Pool.imap consumes its whole input at once: hand it bounded batches instead.
-                    start = len(results)
-                    results.extend([None] * len(batch))
-                    chunk = 1 if method == "spawn" else max(1, min(16, len(batch) // (self.jobs * 8)))
-                    numbered = list(enumerate(batch, start))
-                    # Chunks as items (chunksize 1): only then does imap's iterator take a timeout.
-                    chunks = [numbered[i:i + chunk] for i in range(0, len(numbered), chunk)]
-                    answers = pool.imap_unordered(_local_call_chunk, chunks, chunksize=1)
-                    while True:
-                        signals.check()
-                        try:
-                            finished = answers.next(timeout=SIGNAL_POLL)
-                        except multiprocessing.TimeoutError:
-                            continue
-                        except StopIteration:
-                            break
-                        for number, result in finished:
-                            results[number] = result
-                            if on_result is not None:
-                                on_result(result)
-                    batch = list(itertools.islice(pending, self.jobs * BATCH_PER_WORKER))
-                pool.close()
+                workers.run(chunks, record, signals.check)
             except BaseException:
-                pool.terminate()
+                workers.kill()
                 raise
-            finally:
-                pool.join()
-        return results
+            workers.close()
+        return [answers[number] for number in range(len(answers))]
 
 
 SIGNAL_POLL = 0.1  # s: how soon a deferred Ctrl-C or SIGTERM stops a local pool
 
 
 class _DeferredSignals:
-    """While a process pool runs, Ctrl-C and SIGTERM are noted, then acted on between results.
+    """While local workers run, Ctrl-C and SIGTERM are noted, then acted on between results.
 
     Their handlers raise (KeyboardInterrupt, the CLI's Terminated); raised at an arbitrary
-    point of multiprocessing's code, between a lock's acquire and the block that releases it
-    (bpo-29988), the exception left a lock held and `pool.terminate()` waited forever for it
-    (seen once: a compile that never ended after SIGTERM). Here the previous handler runs at
-    a point where no lock is held. Off the main thread signals cannot be set: nothing changes."""
+    point, in the middle of a message on a worker's pipe or between a lock's acquire and the
+    block that releases it (bpo-29988), the exception could leave a message half sent or a
+    lock held. Here the previous handler runs where nothing is in flight. Off the main thread
+    signals cannot be set: nothing changes."""
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
 

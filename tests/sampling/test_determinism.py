@@ -39,6 +39,16 @@ def test_caches_do_not_change_scenes_on_a_spec_with_random_regions():
         assert _dump(warm.scene(2, k)) == _dump(cold.scene(2, k))
 
 
+def test_joint_law_sweeps_give_the_same_scene_whatever_came_before():
+    """bin_picking's sweeps reuse regions within a scene (SceneContext.prepared) and move the
+    bin with its parts: scene k is still the same warm or cold, forwards or backwards."""
+    spec = str(REPO / "specs" / "bin_picking.prs")
+    warm = compile_sampler(spec)
+    forward = [_dump(warm.scene(4, k)) for k in range(6)]
+    cold = compile_sampler(spec)
+    assert [_dump(cold.scene(4, k)) for k in reversed(range(6))] == forward[::-1]
+
+
 def test_global_numpy_state_is_not_used():
     s = compile_sampler(SPEC)
     np.random.seed(1)
