@@ -47,6 +47,7 @@ class AssetLink:
     chain: tuple[BodyStep, ...]  # the root body first, this link last
     root_position: tuple[float, float, float]  # the root body's origin in the file's world
     boxes: tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]  # (low, high) each
+    meshes: int = 0  # how many of those boxes bound a collision mesh (MuJoCo collides one as its convex hull)
 
 
 def asset_link(asset: ArticulatedAsset, name: str, folders: Sequence[str] = ()) -> AssetLink:
@@ -77,14 +78,15 @@ def _asset_link(source: str, digest: str, folders: tuple[str, ...], name: str) -
         b = int(model.body_parentid[b])
     root = int(model.body_rootid[body])
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
-    boxes = []
+    boxes, meshes = [], 0
     for g in range(model.ngeom):
         if model.geom_bodyid[g] != body or not (model.geom_contype[g] or model.geom_conaffinity[g]):
             continue
+        meshes += int(model.geom_type[g]) == int(mujoco.mjtGeom.mjGEOM_MESH)
         centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
         # The geom's box in the body frame (exact for boxes set along the body's axes).
         turn = np.zeros(9)
         mujoco.mju_quat2Mat(turn, model.geom_quat[g])
         local = (centre + corners * half) @ turn.reshape(3, 3).T + model.geom_pos[g]
         boxes.append((tuple(float(v) for v in local.min(axis=0)), tuple(float(v) for v in local.max(axis=0))))
-    return AssetLink(name, tuple(reversed(chain)), tuple(float(v) for v in model.body_pos[root]), tuple(boxes))
+    return AssetLink(name, tuple(reversed(chain)), tuple(float(v) for v in model.body_pos[root]), tuple(boxes), meshes)

@@ -91,7 +91,7 @@ def _check_link_targets(obj: ObjectDecl) -> None:
         if isinstance(target, ir.LinkRef) and target.link is not None and isinstance(spec, (ir.In, ir.On)):
             surfaces = link_surfaces(target.link.boxes)
             link_target_error(format_expr(target), surfaces.support is not None, surfaces.interior is not None,
-                              isinstance(spec, ir.In), spec.completely, spec.span)
+                              isinstance(spec, ir.In), spec.completely, spec.span, target.link.meshes)
 
 
 def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) -> ObjectPlan:

@@ -130,12 +130,16 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
 
 
 def link_target_error(label: str, has_support: bool, hollow: bool, inside: bool, completely: bool,
-                      span: Span | None) -> None:
-    """The error for `on`/`in` a link that has no support surface or is not hollow (none if it fits)."""
+                      span: Span | None, meshes: int = 0) -> None:
+    """The error for `on`/`in` a link that has no support surface or is not hollow (none if it fits);
+    `meshes`: how many of the link's collision geoms are meshes (each collides as its convex hull)."""
     word = ("completely " if completely else "") + ("in" if inside else "on")
     if inside and not hollow:
+        why = (f" ({meshes} of its collision geoms {'is a mesh' if meshes == 1 else 'are meshes'}: MuJoCo collides "
+               "a mesh as its convex hull, so a drawer or bin modelled as one mesh has no inside; give its floor "
+               "and walls as collision geoms of their own, boxes or convex meshes)") if meshes else ""
         raise PrscError(f"`{word} {label}` needs a hollow link (a floor walled on four sides), and {label} is "
-                        f"none: to rest on it write `{'completely on' if completely else 'on'} {label}`", span)
+                        f"none{why}: to rest on it write `{'completely on' if completely else 'on'} {label}`", span)
     if not inside and not has_support:
         raise PrscError(f"`{word} {label}`: the link has no upward face with free space above it", span)
 

@@ -153,6 +153,36 @@ def test_check_reports_a_bad_link_at_its_line(tmp_path, line, message):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_drawer_of_one_collision_mesh_is_refused_and_the_error_says_why(tmp_path):
+    """A drawer whose floor and walls are one collision mesh collides as that mesh's convex hull
+    in MuJoCo (a solid block): `in` it is an error at its line that says so."""
+    import re
+
+    import trimesh
+
+    urdf = (DATA / "cabinet.urdf").read_text()
+    drawer = urdf[urdf.index('<link name="drawer">'):urdf.index("</link>", urdf.index('<link name="drawer">'))]
+    parts = []
+    for origin, size in re.findall(r'<collision><origin xyz="([^"]+)"/><geometry><box size="([^"]+)"/>', drawer):
+        box = trimesh.creation.box(extents=[float(v) for v in size.split()])
+        box.apply_translation([float(v) for v in origin.split()])
+        parts.append(box)
+    assert len(parts) == 5  # the floor and four walls
+    trimesh.util.concatenate(parts).export(tmp_path / "drawer.obj")
+    one_mesh = re.sub(r"<collision>.*?</collision>", "", drawer, flags=re.S)
+    one_mesh = one_mesh.replace("</inertial>", '</inertial>\n    <collision><geometry><mesh filename="drawer.obj"/>'
+                                "</geometry></collision>", 1)
+    (tmp_path / "cabinet.urdf").write_text(urdf.replace(drawer, one_mesh))
+    (tmp_path / "cab.prs").write_text(SPEC)
+    line = SPEC.splitlines().index('cube = Cube completely in cab.links["drawer"], with color "red"') + 1
+    for command in ("check", "compile"):
+        done = _prsc(command, str(tmp_path / "cab.prs"), *(["-o", str(tmp_path / "out")] if command == "compile" else []))
+        assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+        assert f"cab.prs:{line}:" in done.stderr and "needs a hollow link" in done.stderr, done.stderr
+        assert "1 of its collision geoms is a mesh: MuJoCo collides a mesh as its convex hull" in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
 LIBRARY_SPEC = """\
 from tabletop import *
 
