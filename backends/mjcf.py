@@ -336,12 +336,12 @@ class _Template:
 _ATTRIBUTE_ESCAPES = str.maketrans({"&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "\n": "&#10;",
                                     "\r": "&#13;", "\t": "&#09;"})
 _templates: dict[tuple, _Template] = {}
+TEMPLATES_KEPT = 64  # topologies a process keeps (a spec has one, or a few with random models)
 
 
 def _attribute(text: str) -> str:
     """`text` as an XML attribute value (a file path may hold any of these)."""
     return text.translate(_ATTRIBUTE_ESCAPES)
-TEMPLATES_KEPT = 64  # topologies a process keeps (a spec has one, or a few with random models)
 
 
 def _topology(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path) -> tuple:

@@ -76,12 +76,11 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
         position, rotation = arm.tool_pose(data)
         error_p = goal - position
         axis = rotation[:, 2]
-        tilt = math.acos(min(1.0, max(-1.0, -axis[2])))
-        distance = float(np.linalg.norm(error_p)) + tilt
-        if distance - tilt < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE:
+        miss, tilt = float(np.linalg.norm(error_p)), math.acos(min(1.0, max(-1.0, -axis[2])))
+        if miss < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE:
             return q, True
-        if distance < best * (1 - STALL_GAIN):
-            best, since_best = distance, 0
+        if miss + tilt < best * (1 - STALL_GAIN):
+            best, since_best = miss + tilt, 0
         else:
             since_best += 1
             if since_best == STALL_ITERATIONS:

@@ -30,7 +30,7 @@ import numpy as np
 from prsc.arm_ik import RESTARTS, ArmFrames, reach_top_down
 from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
-from prsc.constraints.reach_ring import RING_KEYS, ReachRing, ring_from_rays, ring_json
+from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
 RECIPE_VERSION = "5"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = 0.12  # m above the point the tool must also reach
@@ -187,16 +187,14 @@ def arm_reach(asset: ArticulatedAsset) -> ArmReach:
     path = reach_cache(asset)
     if path.is_file():
         data = json.loads(path.read_text(encoding="utf-8"))
-        ring = ReachRing(*(np.array(data[key]) for key in RING_KEYS))
-        return ArmReach(ring, tuple(tuple(r) for r in data["rays"]))
-    cell = compute_reach(asset)
+        return ArmReach(ring_from_json(data), tuple(tuple(r) for r in data["rays"]))
+    reach = compute_reach(asset)
     path.parent.mkdir(parents=True, exist_ok=True)
-    ring = cell.ring
     atomic_write(path, json.dumps({
         "asset": os.path.basename(asset.source), "sha256": asset.digest,
         "frame": "the arm's root frame: origin at the root body, +x ahead, +z up",
         "reach": "A p <= b, and neither hole_A p < hole_b nor gap_A p < gap_b",
-        **ring_json(ring),
-        "rays": [list(r) for r in cell.rays],
+        **ring_json(reach.ring),
+        "rays": [list(r) for r in reach.rays],
     }, indent=1) + "\n")
-    return cell
+    return reach

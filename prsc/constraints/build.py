@@ -77,5 +77,12 @@ def rule_rows(rule: Rule, ctx: SceneContext, support: Support) -> Polytope:
 
 
 def excluded_cells(rules: tuple[Rule, ...], ctx: SceneContext, support: Support) -> list[Polytope]:
-    """The convex cells an object's centre must stay out of in one scene (ObjectPlan.exclusions)."""
-    return [rule_rows(rule, ctx, support) for rule in rules]
+    """The convex cells an object's centre must stay out of in one scene (ObjectPlan.exclusions),
+    each once: `reachable by` an arm that turns all the way round has no gap, and its gap cell
+    repeats its hole, which the free-space decomposition would otherwise subtract twice."""
+    cells: list[Polytope] = []
+    for rule in rules:
+        rows = rule_rows(rule, ctx, support)
+        if not any(rows.same_rows(cell) for cell in cells):
+            cells.append(rows)
+    return cells

@@ -34,7 +34,8 @@ DEAD_END = "dead end"
 CAUSES = (COLLISION, RELATIVE, CONTAINMENT, REQUIRE)
 
 # Rule kinds whose rows are a cell the centre must stay out of (ObjectPlan.exclusions):
-# `not visible from C`, and the hole about a robot's base that `reachable by R` excludes.
+# `not visible from C`, and the hole about a robot's base and the gap behind it that
+# `reachable by R` excludes.
 EXCLUSION_KINDS = frozenset({"not visible", "unreachable"})
 
 Evaluator = Callable[[SceneContext], Any]

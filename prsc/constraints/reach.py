@@ -1,5 +1,6 @@
 """`reachable by R`: the robot's top-down reach as exact rows: an outer convex cell (the
-rule `reachable`) minus a convex hole about the base (the excluded cell `unreachable`).
+rule `reachable`) minus a convex hole about the base and a wedge-shaped gap where the base
+cannot turn (the two excluded cells `unreachable`).
 
 For the Panda, prsc/constraints/panda_reach.json holds them in the arm base's frame
 (origin at the bottom centre of the Robot box, +y ahead, +z up), inside the set of points
@@ -23,7 +24,7 @@ from prsc.constraints.values import ObjectValue
 from prsc.ir.models import model_of
 from prsc.errors import PrscError, Span
 from prsc.geometry.polytope import Polytope
-from prsc.constraints.reach_ring import RING_KEYS, ReachRing
+from prsc.constraints.reach_ring import ReachRing, ring_from_json
 
 DATA = Path(__file__).resolve().parent
 
@@ -34,8 +35,7 @@ def reach_ring(model: str) -> ReachRing | None:
     path = reach_file(model)
     if not path.is_file():
         return None
-    ring = json.loads(path.read_text(encoding="utf-8"))["ring"]
-    return ReachRing(*(np.array(ring[key], dtype=float) for key in RING_KEYS))
+    return ring_from_json(json.loads(path.read_text(encoding="utf-8"))["ring"])
 
 
 def reach_file(model: str) -> Path:

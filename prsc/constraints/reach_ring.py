@@ -151,6 +151,11 @@ def ring_json(ring: ReachRing) -> dict[str, list]:
     return dict(zip(RING_KEYS, (x.tolist() for x in (ring.a, ring.b, ring.hole_a, ring.hole_b, ring.gap_a, ring.gap_b))))
 
 
+def ring_from_json(data: dict) -> ReachRing:
+    """The ring `ring_json` wrote (other keys of `data` are ignored)."""
+    return ReachRing(*(np.array(data[key], dtype=float) for key in RING_KEYS))
+
+
 def contains(ring: ReachRing, points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     """Which points (rows, base frame) lie in the ring: in the outer cell and in no excluded cell's interior."""
     points = np.atleast_2d(points)

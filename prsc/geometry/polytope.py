@@ -131,6 +131,11 @@ class Polytope:
             ok &= np.all(np.abs(p @ self.C.T - self.d) <= tol * np.maximum(cn, 1.0), axis=-1)
         return ok
 
+    def same_rows(self, other: Polytope) -> bool:
+        """Whether `other` has exactly these rows (labels aside)."""
+        return (self.A.shape == other.A.shape and self.C.shape == other.C.shape and np.array_equal(self.A, other.A)
+                and np.array_equal(self.b, other.b) and np.array_equal(self.C, other.C) and np.array_equal(self.d, other.d))
+
     def translate(self, offset: ArrayLike) -> Polytope:
         """The set shifted by `offset`."""
         v = np.asarray(offset, dtype=float)

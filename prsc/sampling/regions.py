@@ -131,11 +131,11 @@ def _satisfies(
 class _Translatable:
     """A region prepared in this scene, and which of its rows are tight at a vertex."""
 
-    __slots__ = ("prepared", "b", "d", "tight", "directions", "slack_rows", "slack_at_vertices")
+    __slots__ = ("prepared", "b", "d", "tight", "slack", "directions", "slack_rows", "slack_at_vertices")
 
     def __init__(self, prepared: Prepared, b: np.ndarray, d: np.ndarray, tight: np.ndarray,
                  directions: np.ndarray, slack_rows: np.ndarray, slack_at_vertices: np.ndarray) -> None:
-        self.prepared, self.b, self.d, self.tight = prepared, b, d, tight
+        self.prepared, self.b, self.d, self.tight, self.slack = prepared, b, d, tight, ~tight
         self.directions, self.slack_rows, self.slack_at_vertices = directions, slack_rows, slack_at_vertices
 
     @staticmethod
@@ -157,8 +157,7 @@ class _Translatable:
                 return None
         else:
             shift = np.zeros(poly.A.shape[1])
-        slack = ~self.tight
-        if np.any(self.slack_at_vertices + (self.slack_rows @ shift)[:, None] >= (poly.b[slack] - TOL)[:, None]):
+        if np.any(self.slack_at_vertices + (self.slack_rows @ shift)[:, None] >= (poly.b[self.slack] - TOL)[:, None]):
             return None  # a slack row of `poly` would cut the translated region
         return shift
 
@@ -211,7 +210,6 @@ class RegionProvider:
                translates: bool = False) -> tuple[Prepared, np.ndarray | None]:
         """(prepared region, translation to add to its draws or None); EmptyRegionError if empty.
         With `translates`, per-scene rows that translate rows prepared earlier in this scene reuse them."""
-        general = (lambda poly: self._translated(poly, ctx)) if translates else (lambda poly: (self._general(poly), None))
         if not self.dynamic and support_static:
             if self._static is None:
                 self._static = prepare(self.static_rows if self.static_rows is not None else Polytope.everything())
@@ -225,7 +223,7 @@ class RegionProvider:
             polys = [self.plan.anchored_rows.translate(shift)]
             if self.static_rows is not None:
                 polys.append(self.static_rows)
-            return general(intersect(*polys))
+            return self._per_scene(ctx, translates, intersect(*polys))
         if support_static:
             active = [r for r in self.dynamic if r.soft is None or r.soft in ctx.active_requires]
             dynamic = [rule_rows(r, ctx, support) for r in active]
@@ -240,10 +238,10 @@ class RegionProvider:
                     raise _empty(intersect(*dynamic, *([] if self.static_rows is None else [self.static_rows])))
                 return Prepared(dynamic[which], None, point), None
             polys = dynamic if self.static_rows is None else [self.static_rows, *dynamic]
-            return general(intersect(*polys) if polys else Polytope.everything())
+            return self._per_scene(ctx, translates, intersect(*polys) if polys else Polytope.everything())
         # The object's own size or rotation is random: every rule is rebuilt.
         polys = [rule_rows(r, ctx, support) for r in self.plan.rules if r.soft is None or r.soft in ctx.active_requires]
-        return general(intersect(*polys) if polys else Polytope.everything())
+        return self._per_scene(ctx, translates, intersect(*polys) if polys else Polytope.everything())
 
     def fixed_bounds(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Bounds of the region in every scene (relative to the anchor's position when anchored),
@@ -293,6 +291,10 @@ class RegionProvider:
             verts = a.point[None, :] if a.point is not None else a.sampler.vertices()  # type: ignore[union-attr]
             an = np.maximum(np.linalg.norm(s.A, axis=1), 1.0)
             self._slack = (s.A @ verts.T, s.b - TOL * an)
+
+    def _per_scene(self, ctx: SceneContext, translates: bool, poly: Polytope) -> tuple[Prepared, np.ndarray | None]:
+        """Rows built for this scene, prepared: shifted from this scene's earlier ones with `translates`."""
+        return self._translated(poly, ctx) if translates else (self._general(poly), None)
 
     def _translated(self, poly: Polytope, ctx: SceneContext) -> tuple[Prepared, np.ndarray | None]:
         """(prepared, shift): a preparation of this scene whose region `poly`'s is, translated by

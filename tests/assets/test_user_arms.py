@@ -214,25 +214,23 @@ def qadr_joint(model, qadr: np.ndarray) -> np.ndarray:
     return np.array([int(np.flatnonzero(model.jnt_qposadr == a)[0]) for a in qadr])
 
 
-def test_reachable_cubes_are_reached_top_down_on_the_compiled_model(arm_output, tmp_path):
+def _cubes_reached_top_down(root: Path, scenes: int, name: str) -> float:
+    """Assert that in every scene the arm's tool (the scene's `tcp`) reaches every cube
+    top-down on the compiled model (scipy's IK); the farthest cube's distance from the base."""
     import mujoco
 
     from prsc.asset_files import describe_asset
 
-    name, joints, root, _ = arm_output
-    spec = root.parent.parent / "arm.prs"
-    out = tmp_path / "reach"
-    done = _prsc("compile", str(spec), "-I", str(DATA), "-n", str(REACH_SCENES), "--target", "json,mjcf", "-o", str(out))
-    assert done.returncode == 0, done.stderr
     farthest = 0.0
-    for k in range(REACH_SCENES):
-        scene = json.loads((out / "arm" / "json" / f"{k:05d}.json").read_text())
+    for k in range(scenes):
+        scene = json.loads((root / "json" / f"{k:05d}.json").read_text())
         asset = describe_asset(_arm(scene)["model"])
-        model = mujoco.MjModel.from_xml_path(str(out / "arm" / "mjcf" / f"{k:05d}.xml"))
+        tcp = _arm(scene)["properties"]["tcp"]
+        model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
         data = mujoco.MjData(model)
         mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-        is_site = asset.tcp in asset.sites
-        tool = (model.site if is_site else model.body)(f"arm/{asset.tcp}").id
+        is_site = tcp in asset.sites
+        tool = (model.site if is_site else model.body)(f"arm/{tcp}").id
         qadr = np.array([model.jnt_qposadr[model.joint(f"arm/{j.name}").id] for j in asset.joints])
         base = data.body(f"arm/{asset.root}").xpos.copy()
         for cube in (o for o in scene["objects"] if o["name"].startswith("c")):
@@ -245,6 +243,16 @@ def test_reachable_cubes_are_reached_top_down_on_the_compiled_model(arm_output, 
             error, angle = np.linalg.norm(position - target), np.arccos(min(1.0, -axis[2]))
             assert error < 0.005 and angle < 0.05, f"{name} scene {k} {cube['name']}: {error * 1000:.1f} mm, {angle:.3f} rad"
             farthest = max(farthest, float(np.linalg.norm((target - base)[:2])))
+    return farthest
+
+
+def test_reachable_cubes_are_reached_top_down_on_the_compiled_model(arm_output, tmp_path):
+    name, joints, root, _ = arm_output
+    spec = root.parent.parent / "arm.prs"
+    out = tmp_path / "reach"
+    done = _prsc("compile", str(spec), "-I", str(DATA), "-n", str(REACH_SCENES), "--target", "json,mjcf", "-o", str(out))
+    assert done.returncode == 0, done.stderr
+    farthest = _cubes_reached_top_down(out / "arm", REACH_SCENES, name)
     if name == "xarm6":
         assert farthest >= 0.45, f"the farthest reachable cube is {farthest:.3f} m from the xArm's base"
 
@@ -310,22 +318,8 @@ def test_a_spec_tcp_has_its_own_reach_and_the_controller_drives_it(tmp_path):
     tools = sorted(p.name[len(stem) + 1:].split("-")[0] for p in (build_root() / "reach").glob(f"{stem}-*.json"))
     assert "wrist" in tools, tools  # built for the wrist (the site's own reach may be there from the other tests)
     for k in range(REACH_SCENES):
-        scene = json.loads((out / "arm" / "json" / f"{k:05d}.json").read_text())
-        assert _arm(scene)["properties"]["tcp"] == "wrist"
-        asset = describe_asset(_arm(scene)["model"])
-        model = mujoco.MjModel.from_xml_path(str(out / "arm" / "mjcf" / f"{k:05d}.xml"))
-        data = mujoco.MjData(model)
-        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-        tool = model.body("arm/wrist").id
-        qadr = np.array([model.jnt_qposadr[model.joint(f"arm/{j.name}").id] for j in asset.joints])
-        for cube in (o for o in scene["objects"] if o["name"].startswith("c")):
-            target = np.array(cube["position"])
-            q = _top_down_ik(model, data, tool, False, qadr, target, np.array([j.home for j in asset.joints]))
-            data.qpos[qadr] = q
-            mujoco.mj_kinematics(model, data)
-            axis = data.xmat[tool].reshape(3, 3)[:, 2]
-            error, angle = np.linalg.norm(data.xpos[tool] - target), np.arccos(min(1.0, -axis[2]))
-            assert error < 0.005 and angle < 0.05, f"scene {k} {cube['name']}: {error * 1000:.1f} mm, {angle:.3f} rad"
+        assert _arm(json.loads((out / "arm" / "json" / f"{k:05d}.json").read_text()))["properties"]["tcp"] == "wrist"
+    _cubes_reached_top_down(out / "arm", REACH_SCENES, "lab_arm with tcp wrist")
     # The example controller drives the same frame: after its run, the wrist (not the site
     # 5 cm beyond it) stands at the point above the last cube.
     from prsc.backends.runner.visit import HOVER, visit
