@@ -85,6 +85,14 @@ class _GuardedStdout:
             raise PrscError("cannot write to standard output: it is closed")
         return self._guard(self._stream.write, text)
 
+    def writelines(self, lines: Any) -> None:
+        """Write each line, as sys.stdout does."""
+        if self._closed:
+            lines = list(lines)
+            if any(lines):
+                raise PrscError("cannot write to standard output: it is closed")
+        self._guard(self._stream.writelines, lines)
+
     def flush(self) -> None:
         """Flush, as sys.stdout does."""
         self._guard(self._stream.flush)

@@ -86,10 +86,9 @@ class Scenario:
         return self.sampler.scene(seed, index)
 
     def scenes(self, seed: int, indices: Iterable[int] | int, start: int = 0) -> Iterator[dict[str, Any]]:
-        """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily."""
-        chosen = range(start, start + indices) if isinstance(indices, int) else indices
-        for index in chosen:
-            yield self.sampler.scene(seed, index)
+        """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily; drawn in
+        batches, vectorised over scenes, when the spec allows it (docs/sampling.md, "Batched sampling")."""
+        return self.sampler.scenes(seed, indices, start)
 
     def model(self, seed: int = 0, index: int = 0) -> mujoco.MjModel:
         """One MjModel whose structure fits every scene of the spec (built from scene `index` of `seed`)."""

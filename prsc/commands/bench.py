@@ -4,7 +4,8 @@
 `prsc bench --resets FILE [-n 200]`: resets per CPU-second, `scenario.apply` against a compile per scene.
 
 For each spec and sampler (exact under each law: joint, sequential, rejection; hit-and-run;
-the rejection baseline): scenes per second on one core
+the rejection baseline; for a batched spec, each exact law also one scene at a time, as
+`batched=False` draws it): scenes per second on one core
 (scene JSON dicts, measured in process CPU time so other load on the machine does not
 count; wall-clock rate shown too), rejections per scene by cause (the paper's Table II
 causes: collision, relative position, containment, require; plus dead ends), and the peak
@@ -65,20 +66,30 @@ def add_parser(subparsers: Any) -> None:
 
 def measure(
     path: str, include: list[str], sampler_name: str, n: int, seconds: float, seed: int, walk_length: int, law: str = "joint",
+    batched: bool = True,
 ) -> dict[str, Any]:
-    """Sample up to n scenes (or `seconds` of CPU time): rates, rejections, memory, positions."""
+    """Sample up to n scenes (or `seconds` of CPU time): rates, rejections, memory, positions.
+    A batched spec is drawn in batches (`batched=False`: one scene at a time, from per-scene Generators)."""
     from prsc.sampling import compile_sampler
     from prsc.sampling.mixing import coordinates
+    from prsc.sampling.sampler import BATCH
     from prsc.sampling.stats import RejectionStats
 
-    sampler = compile_sampler(path, include, sampler_name, walk_length=walk_length, law=law)
+    sampler = compile_sampler(path, include, sampler_name, walk_length=walk_length, law=law, batched=batched)
     # One scene first: imports and lazily prepared regions are set-up, not per-scene cost.
     sampler.scene(seed, 10**9)
     stats = RejectionStats()
     cpu0, wall0 = time.process_time(), time.perf_counter()
     done = 0
     positions = []
-    for index in range(n):
+    for first in range(0, n, BATCH) if sampler.batched else ():
+        for scene in sampler.batch(seed, range(first, min(first + BATCH, n))):
+            positions.append([v for o in scene["objects"] for v in o["position"]])
+        done = len(positions)
+        stats.scenes = done
+        if time.process_time() - cpu0 > seconds:
+            break
+    for index in range(n) if not sampler.batched else ():
         result = sampler.sample(seed, index)
         sampler.to_json(result, seed, index)
         stats.merge(result.stats)
@@ -194,6 +205,9 @@ def run(args: argparse.Namespace) -> int:
     laws = [s.strip() for s in args.laws.split(",") if s.strip()]
     if not laws or any(law not in LAWS for law in laws):
         raise PrscError(f"--laws takes a comma-separated subset of {', '.join(LAWS)}, got {args.laws!r}")
+    from prsc.sampling import compile_sampler
+
+    batched = {path: compile_sampler(path, args.include).batched for path in args.files}
     results: dict[str, dict[str, dict[str, Any]]] = {}
     for path in args.files:
         results[path] = {}
@@ -205,6 +219,9 @@ def run(args: argparse.Namespace) -> int:
                 # law whose draws agree, so a shared seed would hide or fake a distance.
                 seed = args.seed + REFERENCE_SEED_OFFSET if row == REFERENCE else args.seed
                 results[path][row] = measure_isolated(path, args.include, name, n, args.seconds, seed, args.walk_length, law)
+                if name == "exact" and law != "rejection" and batched[path]:  # side by side: the same law unbatched
+                    results[path][row + ", one at a time"] = measure_isolated(
+                        path, args.include, name, n, args.seconds, seed, args.walk_length, law, False)
         _distances(results[path])
     if args.json:
         json.dump({"specs": results}, sys.stdout, indent=1)

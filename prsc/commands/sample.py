@@ -7,7 +7,6 @@ failed run leaves no partial file). Scenes are streamed: memory does not grow wi
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import IO, Any
 
@@ -42,13 +41,25 @@ def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> A
     from contextlib import nullcontext
 
     from prsc.commands.progress import progress_bar
+    from prsc.sampling.sampler import BATCH
+    from prsc.sampling.scene_text import scene_encoder
     from prsc.sampling.stats import RejectionStats
 
     total = RejectionStats()
-    dumps = json.JSONEncoder(separators=(",", ":"), allow_nan=False).encode
+    dumps = scene_encoder()
     bar = progress_bar(n if n >= 100 else 0, "sampling")  # short runs need none
     task = bar.add_task("sample", total=n) if bar else None
     with bar if bar else nullcontext():
+        if sampler.batched:  # many scenes per numpy call; a batched scene is never rejected
+            for first in range(start, start + n, BATCH):
+                chunk = range(first, min(first + BATCH, start + n))
+                # Line by line: a reader that goes away (`| head`) is then seen at the next write, where
+                # one large write to a closed pipe can end short without an error.
+                out.writelines(sampler.batch_lines(seed, chunk))
+                if bar:
+                    bar.advance(task, len(chunk))
+            total.scenes += n
+            return total
         for index in range(start, start + n):
             result = sampler.sample(seed, index)
             total.merge(result.stats)

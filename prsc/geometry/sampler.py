@@ -91,8 +91,14 @@ class UniformSampler:
 
     def sample(self, rng: np.random.Generator, n: int) -> NDArray[np.float64]:
         """n independent uniform points, shape (n, ambient_dim)."""
+        return self.points(rng.random((n, self.dim + 1)))
+
+    def points(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The points of uniforms u, shape (n, dim + 1): u[:, 0] picks the simplex, the rest the point in it.
+
+        Elementwise arithmetic only, so each point depends on its own row of u alone (the batched sampler's draws)."""
         k = self.dim
-        u = rng.random((n, k + 1))
+        n = u.shape[0]
         idx = np.searchsorted(self.cumulative, u[:, 0] * self.cumulative[-1], side="right")
         np.minimum(idx, len(self.cumulative) - 1, out=idx)
         verts = np.take(self.simplices, idx, axis=0)  # (n, k+1, d)
@@ -116,7 +122,12 @@ class UniformSampler:
             lam[:, 1] = hi - lo
             lam[:, 0] = lo
         lam[:, k] = 1.0 - lam[:, k]
-        return np.einsum("nj,njd->nd", lam, verts)
+        # v0 + sum_j lam_j (v_j - v0): a coordinate that is the same at every vertex (z on a
+        # table's top) comes out exactly, as a constant, not rounded differently per point.
+        out = verts[:, 0, :].copy()
+        for j in range(1, k + 1):
+            out += lam[:, j:j + 1] * (verts[:, j, :] - verts[:, 0, :])
+        return out
 
     def sample_one(self, rng: np.random.Generator) -> NDArray[np.float64]:
         """One uniform point (ambient_dim,); the same stream use as sample(rng, 1)."""

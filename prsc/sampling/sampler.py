@@ -2,31 +2,37 @@
 
     sampler = compile_sampler("specs/table_cube.prs")
     scene = sampler.scene(seed=0, index=7)          # one scene JSON dict
-    for scene in sampler.scenes(seed=0, n=100): ...  # scenes 0..99
+    for scene in sampler.scenes(seed=0, indices=100): ...  # scenes 0..99
 
-Scene k depends only on (spec, seed, k): the same whatever n, order or worker count.
+Scene k depends only on (spec, seed, k): the same whatever n, order, batch or worker count.
+A spec whose plan allows it is drawn in batches (batched.py), vectorised over scenes.
 """
 
 from __future__ import annotations
 
 import functools
 import os
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from prsc.constraints.lower import lower_program
 from prsc.constraints.model import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir.program import Program
+from prsc.sampling.batch_values import BatchValue, Unbatchable
+from prsc.sampling.batched import BatchedSampler, batch_plan
 from prsc.sampling.gibbs import DEFAULT_SWEEPS
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
-from prsc.sampling.scene_json import object_template, scene_json
+from prsc.sampling.scene_json import json_value, object_template, placed_template, quaternion_wxyz, scene_dict, scene_json
+from prsc.sampling.scene_text import SceneText, scene_encoder
+from prsc.sampling.stats import RejectionStats
 
 SAMPLERS = ("exact", "hit-and-run", "rejection")
 # The law of a scene (docs/sampling.md): the joint one by Gibbs sweeps (default), objects one
 # at a time (sequential), or the joint one by whole-scene rejection (the exact reference).
 LAWS = ("joint", "sequential", "rejection")
+BATCH = 1024  # scenes per batch when drawing many (memory grows with it, not with n)
 
 
 class Sampler:
@@ -46,6 +52,7 @@ class Sampler:
         spec: str | None = None,
         constraints: ConstraintProgram | None = None,
         proposal: Proposal | None = None,
+        batched: bool = True,
     ) -> None:
         if proposal is not None and (sampler != "exact" or joint or law not in (None, "sequential")):
             raise PrscError("--proposal draws with the exact sequential sampler (not with --sampler, --joint or another --law)")
@@ -81,6 +88,25 @@ class Sampler:
             self._engine = SequentialSampler(
                 self.constraints, sampler, walk_length, law == "rejection", limits, proposal, sweeps if law == "joint" else 0
             )
+        # The batched sampler draws the same law (batched.py) from its own stream: every exact
+        # sequential or joint spec it can prove batchable (`batched=False`: one scene at a time).
+        self._batch: BatchedSampler | None = None
+        self._text: SceneText | None = None  # the batched spec's JSON line template, built on first use
+        self.unbatched_because = "not asked for" if not batched else "only the exact sampler's sequential and joint laws batch"
+        if batched and isinstance(self._engine, SequentialSampler) and sampler == "exact" and law != "rejection" \
+                and proposal is None:
+            try:
+                self._batch = BatchedSampler(batch_plan(self.constraints, self._engine.runtimes))
+                self.unbatched_because = ""
+                # Batched objects keep one rotation in every scene.
+                self._quaternions = [quaternion_wxyz(o.rotation) for o in self._batch.plan.objects]
+            except Unbatchable as reason:
+                self.unbatched_because = str(reason)
+
+    @property
+    def batched(self) -> bool:
+        """Whether scenes are drawn in batches (`unbatched_because` says why not)."""
+        return self._batch is not None
 
     def set_proposal(self, proposal: Proposal) -> None:
         """Draw the next scenes from `proposal` instead (a sampler built with one), keeping the compiled spec and its cut cells."""
@@ -90,20 +116,65 @@ class Sampler:
 
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
-        return self._engine.sample(seed, index)
+        if self._batch is None:
+            return self._engine.sample(seed, index)
+        state = self._batch.draw(seed, [index])
+        objects, ctx = self._batch.objects(state, 0, self._engine.runtimes)  # type: ignore[union-attr]
+        return SceneResult(objects, self._batch.params(state, 0), RejectionStats(scenes=1), ctx)
 
     def scene(self, seed: int, index: int) -> dict[str, Any]:
         """Scene `index` under `seed` as scene JSON (docs/scene-json.md)."""
+        if self._batch is not None:
+            return self.batch(seed, [index])[0]
         return self.to_json(self._engine.sample(seed, index), seed, index)
+
+    def batch(self, seed: int, indices: Sequence[int]) -> list[dict[str, Any]]:
+        """Scenes `indices` under `seed` as scene JSON, drawn at once when the spec is batched."""
+        if self._batch is None:
+            return [self.scene(seed, index) for index in indices]
+        state = self._batch.draw(seed, indices)
+        names = [o.name for o in self._batch.plan.objects]
+        positions = [state.positions[name].tolist() for name in names]
+        spec, seed, classes = self.spec, int(seed), self.classes
+        parts = list(zip(self.templates, positions, self._quaternions))
+        out = []
+        for i, index in enumerate(indices):
+            params = {"ground": True}
+            params.update({k: json_value(v) for k, v in self._batch.params(state, i).items()})
+            objects = [placed_template(t, p[i], list(q)) for t, p, q in parts]  # type: ignore[arg-type]
+            out.append(scene_dict(spec, seed, int(index), params, objects, classes))
+        return out
 
     def to_json(self, result: SceneResult, seed: int, index: int) -> dict[str, Any]:
         """The scene JSON of a sampled scene (for callers that also keep its statistics)."""
         return scene_json(self.spec, int(seed), int(index), result.params, result.objects, self.templates, self.classes)
 
-    def scenes(self, seed: int, n: int, start: int = 0) -> Iterator[dict[str, Any]]:
-        """Scenes start .. start+n-1 under `seed`, lazily."""
-        for index in range(start, start + n):
-            yield self.scene(seed, index)
+    def batch_lines(self, seed: int, indices: Sequence[int]) -> list[str]:
+        """Scenes `indices` under `seed` as scene JSON lines, each ending in a newline (what `prsc sample` writes)."""
+        encode = scene_encoder()
+        if self._batch is None or any(isinstance(v, BatchValue) for _, v in self._batch.plan.params):
+            return [encode(scene) + "\n" for scene in self.batch(seed, indices)]
+        objects = self._batch.plan.objects
+        if self._text is None:
+            self._text = SceneText(self.batch(0, [0])[0], [k for k, o in enumerate(objects) if o.fixed is None], encode)
+        state = self._batch.draw(seed, indices)
+        return self._text.lines(int(seed), indices, [state.positions[o.name] for o in objects])
+
+    def scenes(self, seed: int, indices: Iterable[int] | int, start: int = 0) -> Iterator[dict[str, Any]]:
+        """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily, in batches."""
+        chosen = range(start, start + indices) if isinstance(indices, int) else indices
+        if self._batch is None:
+            for index in chosen:
+                yield self.scene(seed, index)
+            return
+        chunk: list[int] = []
+        for index in chosen:
+            chunk.append(index)
+            if len(chunk) == BATCH:
+                yield from self.batch(seed, chunk)
+                chunk = []
+        if chunk:
+            yield from self.batch(seed, chunk)
 
 
 def compile_sampler(

@@ -220,16 +220,22 @@ def scene_json(
         out_objects = [object_json(o) for o in objects]
     else:
         out_objects = [object_json(o) if t is None else _from_template(t, o) for o, t in zip(objects, templates)]
+    return scene_dict(spec, seed, index, out_params, out_objects, classes if classes is not None else {})
+
+
+def scene_dict(spec: str, seed: int, index: int, params: dict[str, Any], objects: list[dict[str, Any]],
+               classes: dict[str, list[str]]) -> dict[str, Any]:
+    """The scene JSON's top level around its parameters and objects (already JSON data)."""
     return {
         "format": FORMAT,
         "version": VERSION,
         "spec": spec,
         "seed": seed,
         "index": index,
-        "params": out_params,
-        "objects": out_objects,
+        "params": params,
+        "objects": objects,
         # Consumers that look objects up by class (the runner's roles) also accept subclasses.
-        "classes": classes if classes is not None else {},
+        "classes": classes,
     }
 
 
@@ -241,9 +247,14 @@ def object_template(name: str, class_name: str, props: dict[str, Any], span: Spa
 
 
 def _from_template(template: dict[str, Any], obj: ObjectValue) -> dict[str, Any]:
+    return placed_template(template, obj.position.tolist(), quaternion_wxyz(obj.rotation))  # type: ignore[union-attr, arg-type]
+
+
+def placed_template(template: dict[str, Any], position: list[float], quaternion: list[float]) -> dict[str, Any]:
+    """An object's JSON from its template (`object_template`) and its pose."""
     out = dict(template)
-    out["position"] = obj.position.tolist()  # type: ignore[union-attr]
-    out["quaternion"] = quaternion_wxyz(obj.rotation)  # type: ignore[arg-type]
+    out["position"] = position
+    out["quaternion"] = quaternion
     # Fresh containers per scene: a caller may edit one scene without touching the next.
     out["dimensions"] = list(template["dimensions"])
     out["color"] = list(template["color"])

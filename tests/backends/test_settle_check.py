@@ -93,8 +93,8 @@ def test_the_settle_check_lists_a_cube_on_a_hollow_trays_rim(tmp_path, capsys):
 
 def test_the_settle_check_lists_a_cube_tipping_over_a_wall(tmp_path):
     # The naive spec places the cube with a bare `on`: its centre inside the walls, its
-    # footprint sometimes across one. Scene 1 of seed 0 is such a scene.
-    root = compile_scenes(str(REPO / "specs" / "table_cube_naive.prs"), ["json", "mjcf"], 2, 0, str(tmp_path / "out"))
+    # footprint sometimes across one. Scene 1 of seed 4 is such a scene, scene 0 is not.
+    root = compile_scenes(str(REPO / "specs" / "table_cube_naive.prs"), ["json", "mjcf"], 2, 4, str(tmp_path / "out"))
     results = settle_scenes(compiled_scenes(root))
     tipped = [d for r in results for d in r.drifts]
     assert tipped and all(d.name == "c1" and "across a wall of tr_1" in d.cause and d.distance > LIMIT for d in tipped)

@@ -54,7 +54,8 @@ def test_ir_stage_is_the_typed_program(capsys):
 def test_constraints_stage_is_the_default(capsys):
     text = _explain(capsys)
     assert text == _explain(capsys, "--stage", "constraints")
-    assert text.startswith(f"spec: {TABLE_CUBE}\nevaluation order: table, r1, r2, tr_1, tr_2, c1, camera\n")
+    assert text.startswith(f"spec: {TABLE_CUBE}\nevaluation order: table, r1, r2, tr_1, tr_2, c1, camera\n"
+                           "drawn in batches (docs/sampling.md, \"Batched sampling\")\n")
     assert f"tr_1 (Tray) declared at {TABLE_CUBE}:14" in text
 
 

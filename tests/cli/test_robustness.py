@@ -38,10 +38,11 @@ def test_a_failing_standard_output_is_a_user_error(monkeypatch, capsys):
 
 def test_real_full_device_and_closed_pipe():
     """Through the real interpreter: /dev/full, and `prsc sample | head -1` (quiet exit 141)."""
-    with open("/dev/full", "w") as full:
-        done = subprocess.run([*PRSC, "check", TABLE_CUBE], stdout=full, stderr=subprocess.PIPE, text=True, cwd=REPO)
-    assert done.returncode == 2
-    assert done.stderr == "prsc: error: cannot write to standard output: No space left on device\n"
+    for command in (["check", TABLE_CUBE], ["sample", TABLE_CUBE, "-n", "2000"]):  # sample: batched lines
+        with open("/dev/full", "w") as full:
+            done = subprocess.run([*PRSC, *command], stdout=full, stderr=subprocess.PIPE, text=True, cwd=REPO)
+        assert done.returncode == 2
+        assert done.stderr == "prsc: error: cannot write to standard output: No space left on device\n"
     sample = subprocess.Popen([*PRSC, "sample", TABLE_CUBE, "-n", "500"], stdout=subprocess.PIPE,
                               stderr=subprocess.PIPE, cwd=REPO)
     first = sample.stdout.readline()

@@ -66,7 +66,9 @@ def test_bench_json_reports_every_sampler(capsys):
     report = json.loads(capsys.readouterr().out)["specs"]
     assert set(report) == {TABLE_CUBE, NAIVE}
     for spec, per in report.items():
-        assert set(per) == {"exact/joint", "exact/sequential", "exact/rejection", "hit-and-run", "rejection"}
+        # Both specs are batched: each exact law also one scene at a time, side by side.
+        assert set(per) == {"exact/joint", "exact/sequential", "exact/rejection", "hit-and-run", "rejection",
+                            "exact/joint, one at a time", "exact/sequential, one at a time"}
         for name, r in per.items():
             assert r["scenes"] == 5 and r["scenes_per_s"] > 0 and r["peak_memory_mb"] > 0
             assert set(r["rejections_by_cause"]) >= {"collision", "relative position", "containment", "require"}
