@@ -233,19 +233,36 @@ def _free_polygons(reg: AffineRegion, first: _Piece, obstacles: Sequence[Polytop
     return FreeSpace(reg, tuple(_polygon_piece(p, area) for p, area in polys))
 
 
+@dataclass(frozen=True, eq=False)
+class RegionBase:
+    """What `free_space` computes from the region alone: its affine reduction and its first piece."""
+
+    reg: AffineRegion
+    first: _Piece | None
+
+
+def region_base(region: Polytope, tol: float = TOL, bound: float = BOUND) -> RegionBase:
+    """The region's reduction and first piece, for decomposing it again with other obstacles."""
+    reg = reduce_affine(region, tol)
+    return RegionBase(reg, _make_piece(reg.A, reg.b, reg.center, bound) if reg.dim else None)
+
+
 def free_space(
     region: Polytope,
     obstacles: Sequence[Polytope],
     tol: float = TOL,
     bound: float = BOUND,
+    base: RegionBase | None = None,
 ) -> FreeSpace:
-    """Decompose region minus the union of (full-dimensional) obstacles into convex pieces.
+    """Decompose region minus the union of (full-dimensional) obstacles into convex pieces
+    (`base`: `region_base(region, tol, bound)` computed before).
 
     Raises EmptyRegionError if the region itself is empty, UnboundedRegionError if it is
     unbounded; an empty FreeSpace (no pieces) if obstacles cover it.
     """
-    reg = reduce_affine(region, tol)
-    first = _make_piece(reg.A, reg.b, reg.center, bound) if reg.dim else None
+    if base is None:
+        base = region_base(region, tol, bound)
+    reg, first = base.reg, base.first
     if reg.dim == 0:
         point = reg.origin
         for obs in obstacles:
@@ -268,7 +285,8 @@ def free_space(
 
 
 def free_space_sampler(
-    region: Polytope, obstacles: Sequence[Polytope], tol: float = TOL, bound: float = BOUND
+    region: Polytope, obstacles: Sequence[Polytope], tol: float = TOL, bound: float = BOUND,
+    base: RegionBase | None = None,
 ) -> UniformSampler:
     """Exact uniform sampler over region minus obstacles; EmptyRegionError proves a dead end."""
-    return free_space(region, obstacles, tol, bound).sampler()
+    return free_space(region, obstacles, tol, bound, base).sampler()

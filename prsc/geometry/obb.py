@@ -25,8 +25,16 @@ from prsc.geometry.boxes import Box
 from prsc.geometry.polytope import NO_LABEL, Polytope
 
 CONTACT_TOL = 1e-6
+_NO_EQUALITIES = np.zeros((0, 3))
+_NO_EQ_OFFSETS = np.zeros(0)
+_NO_EQ_LABELS = np.zeros(0, dtype=np.int64)
 # Cross products shorter than this come from (nearly) parallel edges and are skipped.
 _PARALLEL = 1e-9
+
+
+def axis_aligned(rotation: NDArray[np.float64]) -> bool:
+    """Whether a rotation only permutes and flips the world axes (its box's faces are axis-aligned)."""
+    return all(v == 0.0 or v == 1.0 or v == -1.0 for v in rotation.ravel().tolist())  # plain floats: 9 values
 
 
 def separating_axes(ra: ArrayLike, rb: ArrayLike) -> NDArray[np.float64]:
@@ -158,14 +166,19 @@ def minkowski_obstacle(
     """
     r = np.asarray(rotation, dtype=float)
     h = np.asarray(half_extents, dtype=float)
-    axes = separating_axes(placed.rotation, r)
-    axes = axes[np.any(axes != 0.0, axis=1)]
-    # Drop repeated directions (shared axes of the two rotations, e.g. both yaw-only).
-    keep: list[int] = []
-    for i in range(axes.shape[0]):
-        if all(abs(float(axes[i] @ axes[j])) < 1.0 - 1e-12 for j in keep):
-            keep.append(i)
-    n = axes[keep]
+    if axis_aligned(placed.rotation) and axis_aligned(r):
+        # Every SAT axis of two axis-aligned boxes is one of the placed box's own three.
+        n = placed.rotation.T.copy()
+    else:
+        axes = separating_axes(placed.rotation, r)
+        axes = axes[np.any(axes != 0.0, axis=1)]
+        # Drop repeated directions (shared axes of the two rotations, e.g. both yaw-only):
+        # an axis parallel to an earlier one is parallel to the earlier one kept.
+        parallel = np.abs(axes @ axes.T) >= 1.0 - 1e-12
+        n = axes[~np.tril(parallel, k=-1).any(axis=1)]
     reach = placed.support(n) + np.abs(n @ r) @ h - contact_tol
     mid = n @ placed.center
-    return Polytope.from_rows(np.vstack([n, -n]), np.concatenate([mid + reach, -mid + reach]), label)
+    rows = np.vstack([n, -n])
+    # Finite by construction (unit axes, finite boxes): the rows need no checks of from_rows.
+    return Polytope(rows, np.concatenate([mid + reach, -mid + reach]), _NO_EQUALITIES, _NO_EQ_OFFSETS,
+                    np.full(len(rows), label, dtype=np.int64), _NO_EQ_LABELS)

@@ -13,14 +13,14 @@ from __future__ import annotations
 import numpy as np
 
 from prsc.geometry.boxes import Box
-from prsc.geometry.obb import CONTACT_TOL, boxes_collide, minkowski_obstacle
+from prsc.geometry.obb import CONTACT_TOL, axis_aligned, boxes_collide, minkowski_obstacle
 from prsc.geometry.polytope import Polytope
 
 
 class PlacedBox:
     """A placed object's box, with its AABB half extents for the broad phase."""
 
-    __slots__ = ("name", "index", "center", "reach", "allow", "_center", "_rotation", "_half", "_box")
+    __slots__ = ("name", "index", "center", "reach", "allow", "aligned", "_center", "_rotation", "_half", "_box")
 
     def __init__(
         self, name: str, index: int, center: np.ndarray, rotation: np.ndarray, half: np.ndarray, allow: bool
@@ -31,6 +31,7 @@ class PlacedBox:
         self._center, self._rotation, self._half = center, rotation, half
         self.center: tuple[float, float, float] = tuple(center.tolist())  # type: ignore[assignment]
         self.reach: tuple[float, float, float] = tuple((np.abs(rotation) @ half).tolist())  # type: ignore[assignment]
+        self.aligned = axis_aligned(rotation)  # its box is its axis-aligned bounding box
         self._box: Box | None = None
 
     @property
@@ -98,10 +99,15 @@ def first_hit(
     px, py, pz = center.tolist()
     rx, ry, rz = reach
     box = None
+    aligned: bool | None = None
     for q in candidates:
         (cx, cy, cz), (ex, ey, ez) = q.center, q.reach
         if abs(px - cx) >= rx + ex - tol or abs(py - cy) >= ry + ey - tol or abs(pz - cz) >= rz + ez - tol:
             continue
+        if aligned is None:
+            aligned = axis_aligned(rotation)
+        if aligned and q.aligned:
+            return q  # two axis-aligned boxes overlapping by more than tol on every world axis collide
         if box is None:
             box = Box(center, rotation, half)
         if boxes_collide(box, q.box, tol):

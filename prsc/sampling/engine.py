@@ -286,14 +286,13 @@ class SequentialSampler:
         # (the obstacles of a box inscribed in the footprint): a superset of the free
         # space, from which rejection is still exactly uniform, and empty only if there
         # is no free position at all.
-        poly = region.poly if shift is None else region.poly.translate(shift)
         if rt.after_position:
             mode = rt.plan.orientation.bound_mode  # type: ignore[union-attr]
             rotation, obstacle_half = np.eye(3), inscribed_half(half, mode)
         else:
             rotation, obstacle_half = obj.rotation, half
         try:
-            free = free_space_sampler(poly, obstacles_for(candidates, rotation, obstacle_half) + excluded)  # type: ignore[arg-type]
+            free = region.free_space(shift, obstacles_for(candidates, rotation, obstacle_half) + excluded)  # type: ignore[arg-type]
         except EmptyRegionError:
             return self._blocked(rt, candidates, run)
         if ctx.proposal is not None:

@@ -34,7 +34,6 @@ from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.geometry.exceptions import EmptyRegionError
 from prsc.sampling.attempt import Attempt
-from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, near, obstacles_for
 from prsc.sampling.regions import Prepared, violated_rule
@@ -290,8 +289,7 @@ class GibbsSweeps:
                 reach = rt.reach if rt.reach is not None else aabb_reach(o.rotation, half)
                 nearby = near(fixed, lo, hi, reach, containers=rt.plan.rests_in)
                 if nearby:
-                    poly = region.poly if shift is None else region.poly.translate(shift)
-                    free = free_space_sampler(poly, obstacles_for(nearby, o.rotation, half))  # type: ignore[arg-type]
+                    free = region.free_space(shift, obstacles_for(nearby, o.rotation, half))  # type: ignore[arg-type]
             except EmptyRegionError:
                 return None
             if nearby:

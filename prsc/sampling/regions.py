@@ -27,6 +27,7 @@ from prsc.constraints.model import RegionRules, Rule
 from prsc.constraints.support import Support
 from prsc.geometry.affine import AffineRegion, reduce_affine
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.free_space import RegionBase, free_space_sampler, region_base
 from prsc.geometry.hit_and_run import hit_and_run
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.geometry.sampler import UniformSampler, prepare_sampler
@@ -35,12 +36,13 @@ TOL = 1e-9  # metres: feasibility tolerance of a point against its rows
 _CACHE_SIZE = 256
 _TRANSLATES = 4  # preparations kept per row directions and scene (tried in order)
 _SLACK = 1e-7  # metres: a row within this of a vertex counts as tight there
+_BASES = 8  # free-space starts kept per prepared region (by translation)
 
 
 class Prepared:
     """A non-empty region ready for drawing: exact sampler, bounds, affine hull (lazily)."""
 
-    __slots__ = ("poly", "sampler", "point", "lo", "hi", "_affine", "__weakref__")  # weak: proposal.py's cells
+    __slots__ = ("poly", "sampler", "point", "lo", "hi", "_affine", "_bases", "__weakref__")  # weak: proposal.py's cells
 
     def __init__(self, poly: Polytope, sampler: UniformSampler | None, point: np.ndarray | None = None) -> None:
         self.poly = poly
@@ -52,6 +54,9 @@ class Prepared:
             assert sampler is not None
             self.lo, self.hi = sampler.bounds()
         self._affine: AffineRegion | None = None
+        # Per translation: the free-space decomposition's start (a pure function of the rows, so
+        # which scene filled it never matters). Ten cubes on one tray share it until the tray moves.
+        self._bases: OrderedDict[bytes, RegionBase] = OrderedDict()
 
     @property
     def dim(self) -> int:
@@ -72,6 +77,18 @@ class Prepared:
                 self._affine = reduce_affine(self.poly)
             return hit_and_run(self._affine, rng, 1, walk_length)[0]
         return self.sampler.sample_one(rng)  # type: ignore[union-attr]
+
+
+    def free_space(self, shift: np.ndarray | None, obstacles: list[Polytope]) -> UniformSampler:
+        """Exact sampler of the region (plus `shift`) minus `obstacles`; EmptyRegionError if nothing is free."""
+        key = b"" if shift is None else shift.tobytes()
+        poly = self.poly if shift is None else self.poly.translate(shift)
+        base = self._bases.get(key)
+        if base is None:
+            base = self._bases[key] = region_base(poly)
+            if len(self._bases) > _BASES:
+                self._bases.popitem(last=False)
+        return free_space_sampler(poly, obstacles, base=base)
 
 
 def prepare(poly: Polytope) -> Prepared:
