@@ -15,6 +15,10 @@ import numpy as np
 POSITION_TOLERANCE = 0.002  # m
 ANGLE_TOLERANCE = 0.02  # rad
 DOWN = np.array([0.0, 0.0, -1.0])
+# m above a point where the tool must also stand top-down for the point to count as reached:
+# what `reachable by` certifies for a file arm (constraints/arm_reach.py) and where the example
+# controller (backends/runner/visit.py) comes from before going down.
+REACH_APPROACH = 0.12
 RESTARTS = 4  # starts drawn within the joint limits where home's fail: a 7-joint arm's IK from
 # home alone misses a third of the points it reaches top-down (KUKA iiwa: 109 of 150 found)
 STALL_ITERATIONS = 20  # a solve whose error has not fallen by STALL_GAIN in this many steps has stalled
@@ -94,6 +98,16 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
         step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), error)
         q = np.clip(q + step, arm.lower, arm.upper)
     return q, False
+
+
+def turned(home: np.ndarray, arm: ArmFrames, heading: float, azimuth: float) -> np.ndarray:
+    """Home with the first joint turned by `azimuth - heading` (within its limits): the tool, heading
+    `heading` about the arm's root at home, then heads towards `azimuth` (for the base yaw joint
+    most arms have; for another first joint it is one more start)."""
+    q = np.array(home, dtype=float)
+    turn = (azimuth - heading + math.pi) % (2 * math.pi) - math.pi
+    q[0] = float(np.clip(q[0] + turn, arm.lower[0], arm.upper[0]))
+    return q
 
 
 def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarray, home: np.ndarray,

@@ -1,5 +1,6 @@
 """An example controller for any arm (docs/assets.md): the arm's tool visits, top-down, a
-point 10 cm above every cube in turn, driven by its own position servos.
+point 10 cm above every cube in turn, coming down from 12 cm above it (the height that
+`reachable by` certifies with the cube's centre), driven by its own position servos.
 
     prsc run specs/pybullet_arm/xarm_cubes.prs -I "$PYBULLET_DATA" \\
         --controller prsc.backends.runner.visit:visit -n 5
@@ -15,16 +16,20 @@ servos did not get the tool there in 4 s). Copy it as the start of a controller 
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
-from prsc.arm_ik import RESTARTS, ArmFrames, reach_top_down, solve_top_down
+from prsc.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, solve_top_down, turned
 from prsc.assets.articulated import robot_model
 from prsc.backends.names import with_body_names
 from prsc.errors import PrscError
 
 HOVER = 0.10  # m above each cube's centre: a bare flange's link reaches below its frame
-APPROACH = 0.10  # m above that, reached first
+# m above that, reached first: the point `reachable by` certifies with the cube's centre
+# (REACH_APPROACH above it), so a cube the spec places in reach is visited from there.
+APPROACH = REACH_APPROACH - HOVER
 TOLERANCE = 0.01  # m
 ANGLE = 0.1  # rad
 TIMEOUT = 8.0  # simulated s per point
@@ -61,13 +66,19 @@ class Visit:
         servos = _servos(model, arm)
         home = data.qpos[arm.qpos].copy()
         scratch = mujoco.MjData(model)
+        # Where the tool heads at home, about the arm's root: each cube is sought from home
+        # turned towards it, as `reachable by` sought it (prsc/constraints/arm_reach.py).
+        root = data.xpos[model.body(prefix + asset.root).id]
+        tool = arm.tool_pose(data)[0] - root
+        heading = math.atan2(tool[1], tool[0])
         worst = 0.0
         q = home
         for cube in _cubes(scene):
             goal = np.asarray(cube["position"], float) + np.array([0.0, 0.0, HOVER])
             above = goal + np.array([0.0, 0.0, APPROACH])
             scratch.qpos[:] = data.qpos
-            q, ok = reach_top_down(model, scratch, arm, goal, q, home, APPROACH, restarts=RESTARTS)
+            towards = turned(home, arm, heading, math.atan2(goal[1] - root[1], goal[0] - root[0]))
+            q, ok = reach_top_down(model, scratch, arm, goal, q, towards, APPROACH, restarts=RESTARTS)
             q_above, ok_above = solve_top_down(model, scratch, arm, above, q)
             if not (ok and ok_above):
                 return {"outcome": "unreachable", "reason": f"no top-down pose above {cube['name']}", "worst": worst}

@@ -27,13 +27,13 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.arm_ik import RESTARTS, ArmFrames, reach_top_down
+from prsc.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, turned
 from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
 RECIPE_VERSION = "5"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
-APPROACH = 0.12  # m above the point the tool must also reach
+APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
 STEP = 0.05  # m between radii of the coarse scan
@@ -75,12 +75,8 @@ class TopDownIK:
         return reach_top_down(self.model, self.data, self.arm, point + self.root, seed, home, APPROACH, restarts)
 
     def turned(self, azimuth: float) -> np.ndarray:
-        """Home with the first joint turned so that the tool heads towards `azimuth` (a base yaw
-        joint, as most arms have; for another first joint it is one more start)."""
-        q = self.home.copy()
-        turn = (azimuth - self.heading + math.pi) % (2 * math.pi) - math.pi
-        q[0] = float(np.clip(q[0] + turn, self.arm.lower[0], self.arm.upper[0]))
-        return q
+        """Home with the first joint turned so that the tool heads towards `azimuth`."""
+        return turned(self.home, self.arm, self.heading, azimuth)
 
     def reaches_from_home(self, point: np.ndarray) -> bool:
         """Whether the tool reaches the point top-down from home turned towards it (and that bent)."""

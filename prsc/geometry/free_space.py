@@ -17,7 +17,7 @@ from exact contact positions): the caller reports a dead end instead of retrying
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Sequence, TypeVar
+from typing import Any, Callable, Sequence, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -222,29 +222,47 @@ def _subtract_obstacles(
     return pieces
 
 
-def _free_polygons(reg: AffineRegion, first: _Piece, obstacles: Sequence[Polytope], tol: float) -> FreeSpace:
-    """The 2D case: polygons clipped in vertex form (CCW order), in plain floats."""
-    start: Polygon = [(x, y) for x, y in order_polygon(first.vertices).tolist()]
+def _polygon_cut(tol: float) -> Callable[[list[tuple[Polygon, float]], NDArray[np.float64]], list[tuple[Polygon, float]]]:
+    """The 2D cut: polygons clipped in vertex form (CCW order), in plain floats."""
 
     def cut(polys: list[tuple[Polygon, float]], rows: NDArray[np.float64]) -> list[tuple[Polygon, float]]:
         return _subtract_polygons(polys, [(r[0], r[1], r[2]) for r in rows.tolist()], tol)
 
-    polys = _subtract_obstacles(reg, obstacles, [(start, _area(start))], cut)
-    return FreeSpace(reg, tuple(_polygon_piece(p, area) for p, area in polys))
+    return cut
+
+
+def _piece_cut(tol: float, bound: float) -> Callable[[list[_Piece], NDArray[np.float64]], list[_Piece]]:
+    """The 1D and 3D cut: each piece split into convex parts outside the obstacle."""
+
+    def cut(pieces: list[_Piece], rows: NDArray[np.float64]) -> list[_Piece]:
+        at, bt = rows[:, :-1], rows[:, -1]
+        return [sub for piece in pieces for sub in _subtract(piece, at, bt, bound, tol)]
+
+    return cut
 
 
 @dataclass(frozen=True, eq=False)
 class RegionBase:
-    """What `free_space` computes from the region alone: its affine reduction and its first piece."""
+    """A region reduced to its affine hull and split into working pieces (polygons in 2D),
+    minus the obstacles given to `region_base`: where `free_space` starts."""
 
     reg: AffineRegion
-    first: _Piece | None
+    pieces: tuple[Any, ...] | None  # None: the region has measure zero
 
 
-def region_base(region: Polytope, tol: float = TOL, bound: float = BOUND) -> RegionBase:
-    """The region's reduction and first piece, for decomposing it again with other obstacles."""
+def region_base(region: Polytope, fixed: Sequence[Polytope] = (), tol: float = TOL, bound: float = BOUND) -> RegionBase:
+    """The region's reduction and pieces minus the `fixed` obstacles, to decompose it again
+    with other obstacles (the fixed ones subtracted once: a robot's hole about its base)."""
     reg = reduce_affine(region, tol)
-    return RegionBase(reg, _make_piece(reg.A, reg.b, reg.center, bound) if reg.dim else None)
+    first = _make_piece(reg.A, reg.b, reg.center, bound) if reg.dim else None
+    if first is None or reg.dim == 0:
+        return RegionBase(reg, None if reg.dim else ())
+    if reg.dim == 2:
+        start: Polygon = [(x, y) for x, y in order_polygon(first.vertices).tolist()]
+        pieces: list[Any] = _subtract_obstacles(reg, fixed, [(start, _area(start))], _polygon_cut(tol))
+    else:
+        pieces = _subtract_obstacles(reg, fixed, [first], _piece_cut(tol, bound))
+    return RegionBase(reg, tuple(pieces))
 
 
 def free_space(
@@ -255,14 +273,15 @@ def free_space(
     base: RegionBase | None = None,
 ) -> FreeSpace:
     """Decompose region minus the union of (full-dimensional) obstacles into convex pieces
-    (`base`: `region_base(region, tol, bound)` computed before).
+    (`base`: `region_base(region, fixed, tol, bound)` computed before: its fixed obstacles are
+    subtracted too).
 
     Raises EmptyRegionError if the region itself is empty, UnboundedRegionError if it is
     unbounded; an empty FreeSpace (no pieces) if obstacles cover it.
     """
     if base is None:
-        base = region_base(region, tol, bound)
-    reg, first = base.reg, base.first
+        base = region_base(region, (), tol, bound)
+    reg = base.reg
     if reg.dim == 0:
         point = reg.origin
         for obs in obstacles:
@@ -272,16 +291,13 @@ def free_space(
             if np.all(obs.A @ point - obs.b < -tol * an):
                 return FreeSpace(reg, ())
         return FreeSpace(reg, (_Piece(np.zeros((0, 0)), np.zeros(0), np.zeros((1, 1, 0)), np.zeros((1, 0)), 1.0),))
-    if first is None:
+    if base.pieces is None:
         raise EmptyRegionError("the region has measure zero")
     if reg.dim == 2:
-        return _free_polygons(reg, first, obstacles, tol)
-
-    def cut(pieces: list[_Piece], rows: NDArray[np.float64]) -> list[_Piece]:
-        at, bt = rows[:, :-1], rows[:, -1]
-        return [sub for piece in pieces for sub in _subtract(piece, at, bt, bound, tol)]
-
-    return FreeSpace(reg, tuple(_subtract_obstacles(reg, obstacles, [first], cut)))
+        polys = _subtract_obstacles(reg, obstacles, list(base.pieces), _polygon_cut(tol)) if base.pieces else []
+        return FreeSpace(reg, tuple(_polygon_piece(p, area) for p, area in polys))
+    pieces = _subtract_obstacles(reg, obstacles, list(base.pieces), _piece_cut(tol, bound)) if base.pieces else []
+    return FreeSpace(reg, tuple(pieces))
 
 
 def free_space_sampler(

@@ -292,7 +292,7 @@ class SequentialSampler:
         else:
             rotation, obstacle_half = obj.rotation, half
         try:
-            free = region.free_space(shift, obstacles_for(candidates, rotation, obstacle_half) + excluded)  # type: ignore[arg-type]
+            free = region.free_space(shift, obstacles_for(candidates, rotation, obstacle_half), excluded)  # type: ignore[arg-type]
         except EmptyRegionError:
             return self._blocked(rt, candidates, run)
         if ctx.proposal is not None:

@@ -79,13 +79,14 @@ class Prepared:
         return self.sampler.sample_one(rng)  # type: ignore[union-attr]
 
 
-    def free_space(self, shift: np.ndarray | None, obstacles: list[Polytope]) -> UniformSampler:
-        """Exact sampler of the region (plus `shift`) minus `obstacles`; EmptyRegionError if nothing is free."""
-        key = b"" if shift is None else shift.tobytes()
+    def free_space(self, shift: np.ndarray | None, obstacles: list[Polytope], fixed: list[Polytope] = ()) -> UniformSampler:  # type: ignore[assignment]
+        """Exact sampler of the region (plus `shift`) minus `fixed` cells and `obstacles`; EmptyRegionError
+        if nothing is free. The region minus `fixed` (a robot's hole, the same in every scene) is kept."""
+        key = (b"" if shift is None else shift.tobytes()) + b"".join(c.A.tobytes() + c.b.tobytes() for c in fixed)
         poly = self.poly if shift is None else self.poly.translate(shift)
         base = self._bases.get(key)
         if base is None:
-            base = self._bases[key] = region_base(poly)
+            base = self._bases[key] = region_base(poly, fixed)
             if len(self._bases) > _BASES:
                 self._bases.popitem(last=False)
         return free_space_sampler(poly, obstacles, base=base)
