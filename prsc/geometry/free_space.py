@@ -16,7 +16,7 @@ from exact contact positions): the caller reports a dead end instead of retrying
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Sequence, TypeVar
 
 import numpy as np
@@ -248,6 +248,10 @@ class RegionBase:
 
     reg: AffineRegion
     pieces: tuple[Any, ...] | None  # None: the region has measure zero
+
+    def translated(self, shift: NDArray[np.float64]) -> RegionBase:
+        """The start of the region plus `shift` (its pieces are in reduced coordinates: unchanged)."""
+        return RegionBase(replace(self.reg, origin=self.reg.origin + shift), self.pieces)
 
 
 def region_base(region: Polytope, fixed: Sequence[Polytope] = (), tol: float = TOL, bound: float = BOUND) -> RegionBase:

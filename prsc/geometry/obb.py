@@ -158,15 +158,19 @@ def minkowski_obstacle(
     half_extents: ArrayLike,
     contact_tol: float = CONTACT_TOL,
     label: int = NO_LABEL,
+    aligned: bool | None = None,
 ) -> Polytope:
-    """Centres p where a box (rotation, half_extents) would collide with `placed`, as an H-polytope.
+    """Centres p where a box (rotation, half_extents) would collide with `placed`, as an H-polytope
+    (`aligned`: whether both boxes are axis-aligned, when the caller knows).
 
     Rows +-n . p <= +-n . c + s_placed(n) + s_new(n) - contact_tol over the distinct SAT
     axes n; the interior is exactly where `boxes_collide` is True.
     """
     r = np.asarray(rotation, dtype=float)
     h = np.asarray(half_extents, dtype=float)
-    if axis_aligned(placed.rotation) and axis_aligned(r):
+    if aligned is None:
+        aligned = axis_aligned(placed.rotation) and axis_aligned(r)
+    if aligned:
         # Every SAT axis of two axis-aligned boxes is one of the placed box's own three.
         n = placed.rotation.T.copy()
     else:

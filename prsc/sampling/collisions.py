@@ -117,4 +117,5 @@ def first_hit(
 
 def obstacles_for(candidates: list[PlacedBox], rotation: np.ndarray, half: np.ndarray) -> list[Polytope]:
     """Minkowski obstacles: the centres where the new box would hit each candidate."""
-    return [minkowski_obstacle(q.box, rotation, half, CONTACT_TOL) for q in candidates]
+    aligned = axis_aligned(rotation)
+    return [minkowski_obstacle(q.box, rotation, half, CONTACT_TOL, aligned=aligned and q.aligned) for q in candidates]

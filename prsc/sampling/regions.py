@@ -54,8 +54,8 @@ class Prepared:
             assert sampler is not None
             self.lo, self.hi = sampler.bounds()
         self._affine: AffineRegion | None = None
-        # Per translation: the free-space decomposition's start (a pure function of the rows, so
-        # which scene filled it never matters). Ten cubes on one tray share it until the tray moves.
+        # The free-space decomposition's start (a pure function of the rows, so which scene filled
+        # it never matters): one for every translation, and per translation with fixed cells.
         self._bases: OrderedDict[bytes, RegionBase] = OrderedDict()
 
     @property
@@ -82,8 +82,17 @@ class Prepared:
     def free_space(self, shift: np.ndarray | None, obstacles: list[Polytope], fixed: list[Polytope] = ()) -> UniformSampler:  # type: ignore[assignment]
         """Exact sampler of the region (plus `shift`) minus `fixed` cells and `obstacles`; EmptyRegionError
         if nothing is free. The region minus `fixed` (a robot's hole, the same in every scene) is kept."""
-        key = (b"" if shift is None else shift.tobytes()) + b"".join(c.A.tobytes() + c.b.tobytes() for c in fixed)
         poly = self.poly if shift is None else self.poly.translate(shift)
+        if not fixed:
+            # The start of region + t is the region's own, its affine hull moved by t: the
+            # reduced rows, centre and pieces are the same (P + t = {origin + t + basis y : A y <= b}).
+            base = self._bases.get(b"")
+            if base is None:
+                base = self._bases[b""] = region_base(self.poly)
+            if shift is not None:
+                base = base.translated(shift)
+            return free_space_sampler(poly, obstacles, base=base)
+        key = (b"" if shift is None else shift.tobytes()) + b"".join(c.A.tobytes() + c.b.tobytes() for c in fixed)
         base = self._bases.get(key)
         if base is None:
             base = self._bases[key] = region_base(poly, fixed)
