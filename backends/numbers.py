@@ -14,6 +14,17 @@ def num(value: float) -> str:
     return text[:-2] if text.endswith(".0") else text
 
 
+_TEXTS: dict[tuple, str] = {}  # tuples already written: a part's size and pose repeat in every scene
+_TEXTS_KEPT = 1 << 16
+
+
 def nums(values: Iterable[float]) -> str:
     """Space-separated exact floats."""
-    return " ".join(num(v) for v in values)
+    if type(values) is not tuple:
+        return " ".join(num(v) for v in values)
+    text = _TEXTS.get(values)
+    if text is None:
+        if len(_TEXTS) >= _TEXTS_KEPT:
+            _TEXTS.clear()
+        text = _TEXTS[values] = " ".join(num(v) for v in values)
+    return text

@@ -92,7 +92,7 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
     """The constraint-stage report for one compiled sampler."""
     from prsc.geometry.exceptions import GeometryError
     from prsc.geometry.free_space import free_space
-    from prsc.sampling.regions import prepare
+    from prsc.sampling.prepared import prepare
 
     cprog = sampler.constraints
     labels = cprog.labels

@@ -112,7 +112,7 @@ def spec_sampler(spec: str, seed: int, include_dirs: Sequence[str] = (), law: st
     from prsc.sampling import compile_sampler
 
     sampler = compile_sampler(spec, include_dirs=include_dirs, law=law, proposal=proposal_from_json(proposal))
-    return lambda index: sampler.scene(seed=seed, index=index)
+    return sampler.drawer(seed)
 
 
 def add_proposal_argument(parser: Any) -> None:

@@ -13,6 +13,7 @@ depend on how many scenes share a batch.
 
 from __future__ import annotations
 
+import operator
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -210,14 +211,11 @@ def _memoised(draw_id: int, draw: Callable[[BatchState], np.ndarray], lo: np.nda
     return BatchValue(memoised, lo, hi)
 
 
+_OPERATORS = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": operator.truediv}
+
+
 def _apply(op: str, a: Any, b: Any) -> Any:
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
-    return a / b
+    return _OPERATORS[op](a, b)
 
 
 def _interval(op: str, a: BatchValue, b: BatchValue) -> tuple[np.ndarray, np.ndarray]:

@@ -25,6 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from prsc.constraints.context import SceneContext
+from prsc.constraints.model import ConstraintProgram
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
@@ -36,7 +37,7 @@ from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.obb import collides_many
 from prsc.sampling.collisions import CONTACT_TOL, PlacedBox, near, obstacles_for
 from prsc.sampling.counter_stream import scene_keys, uniforms
-from prsc.sampling.regions import TOL
+from prsc.sampling.prepared import TOL
 from prsc.sampling.runtime import ObjectRuntime
 
 _LIMIT = 1 << 64  # seeds and scene indices are unsigned 64-bit counters of the stream
@@ -80,7 +81,7 @@ class BatchPlan:
     params: tuple[tuple[str, Any], ...]  # name -> a constant JSON value or a BatchValue
 
 
-def batch_plan(cprog: Any, runtimes: Sequence[ObjectRuntime]) -> BatchPlan:
+def batch_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) -> BatchPlan:
     """The batch plan of a lowered spec (a ConstraintProgram and its runtimes); Unbatchable says why not."""
     if cprog.soft_requires or cprog.scene_checks:
         raise Unbatchable("requires checked per scene")
@@ -166,10 +167,11 @@ def _anchored(rt: ObjectRuntime, placed: dict[str, BatchObject]) -> BatchObject:
     """An object carried by an earlier one: the anchored region, which the static rows never cut."""
     provider, name = rt.provider, rt.plan.name
     anchor = rt.plan.region.anchor
-    if provider.fixed_bounds() is None or anchor not in placed:
-        raise Unbatchable(f"{name}'s region is cut by its static rows")
-    prepared = provider._anchored  # noqa: SLF001 (the same stage's preparation, made by fixed_bounds)
-    if prepared is None or prepared.sampler is None:
+    provider.fixed_bounds()  # prepares the anchored region and decides whether the static rows may cut it
+    prepared = provider.anchored_prepared
+    if prepared is None or anchor not in placed:
+        raise Unbatchable(f"{name}'s region carried by {anchor} is cut by its static rows")
+    if prepared.sampler is None:
         raise Unbatchable(f"{name}'s region carried by {anchor} is a point")
     own = _corners(prepared.sampler)
     carried = (placed[anchor].corners[:, None, :] + own[None, :, :]).reshape(-1, 3)

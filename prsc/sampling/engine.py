@@ -45,7 +45,7 @@ from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed
 from prsc.sampling.dead_ends import dead_end_error
 from prsc.sampling.gibbs import GibbsSweeps
 from prsc.sampling.proposal import Proposal
-from prsc.sampling.regions import Prepared
+from prsc.sampling.prepared import Prepared
 from prsc.sampling.runtime import ObjectRuntime, build_runtimes, draw_soft_requires, evaluate_params, inside_any
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats

@@ -36,7 +36,8 @@ from prsc.geometry.exceptions import EmptyRegionError
 from prsc.sampling.attempt import Attempt
 from prsc.geometry.polytope import Polytope
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, near, obstacles_for
-from prsc.sampling.regions import Prepared, violated_rule
+from prsc.sampling.prepared import Prepared
+from prsc.sampling.regions import violated_rule
 from prsc.sampling.runtime import ObjectRuntime
 
 

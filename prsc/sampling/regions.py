@@ -25,105 +25,13 @@ from prsc.constraints.build import rule_rows
 from prsc.constraints.context import SceneContext
 from prsc.constraints.model import RegionRules, Rule
 from prsc.constraints.support import Support
-from prsc.geometry.affine import AffineRegion, reduce_affine
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
-from prsc.geometry.free_space import RegionBase, free_space_sampler, region_base
-from prsc.geometry.hit_and_run import hit_and_run
 from prsc.geometry.polytope import Polytope, intersect
-from prsc.geometry.sampler import UniformSampler, prepare_sampler
+from prsc.sampling.prepared import TOL, Prepared, prepare, row_norms, satisfies
 
-TOL = 1e-9  # metres: feasibility tolerance of a point against its rows
 _CACHE_SIZE = 256
 _TRANSLATES = 4  # preparations kept per row directions and scene (tried in order)
 _SLACK = 1e-7  # metres: a row within this of a vertex counts as tight there
-_BASES = 8  # free-space starts kept per prepared region (by translation)
-
-
-class Prepared:
-    """A non-empty region ready for drawing: exact sampler, bounds, affine hull (lazily)."""
-
-    __slots__ = ("poly", "sampler", "point", "lo", "hi", "_affine", "_bases", "__weakref__")  # weak: proposal.py's cells
-
-    def __init__(self, poly: Polytope, sampler: UniformSampler | None, point: np.ndarray | None = None) -> None:
-        self.poly = poly
-        self.sampler = sampler
-        self.point = point
-        if point is not None:
-            self.lo = self.hi = point
-        else:
-            assert sampler is not None
-            self.lo, self.hi = sampler.bounds()
-        self._affine: AffineRegion | None = None
-        # The free-space decomposition's start (a pure function of the rows, so which scene filled
-        # it never matters): one for every translation, and per translation with fixed cells.
-        self._bases: OrderedDict[bytes, RegionBase] = OrderedDict()
-
-    @property
-    def dim(self) -> int:
-        """Intrinsic dimension (0 point ... 3 solid)."""
-        return 0 if self.point is not None else self.sampler.dim  # type: ignore[union-attr]
-
-    @property
-    def measure(self) -> float:
-        """Length, area or volume (1 for a point)."""
-        return 1.0 if self.point is not None else self.sampler.measure  # type: ignore[union-attr]
-
-    def draw(self, rng: np.random.Generator, method: str, walk_length: int) -> np.ndarray:
-        """One point: exact uniform, or the end of a hit-and-run walk from the Chebyshev centre."""
-        if self.point is not None:
-            return self.point.copy()
-        if method == "hit-and-run":
-            if self._affine is None:
-                self._affine = reduce_affine(self.poly)
-            return hit_and_run(self._affine, rng, 1, walk_length)[0]
-        return self.sampler.sample_one(rng)  # type: ignore[union-attr]
-
-
-    def free_space(self, shift: np.ndarray | None, obstacles: list[Polytope], fixed: list[Polytope] = ()) -> UniformSampler:  # type: ignore[assignment]
-        """Exact sampler of the region (plus `shift`) minus `fixed` cells and `obstacles`; EmptyRegionError
-        if nothing is free. The region minus `fixed` (a robot's hole, the same in every scene) is kept."""
-        poly = self.poly if shift is None else self.poly.translate(shift)
-        if not fixed:
-            # The start of region + t is the region's own, its affine hull moved by t: the
-            # reduced rows, centre and pieces are the same (P + t = {origin + t + basis y : A y <= b}).
-            base = self._bases.get(b"")
-            if base is None:
-                base = self._bases[b""] = region_base(self.poly)
-            if shift is not None:
-                base = base.translated(shift)
-            return free_space_sampler(poly, obstacles, base=base)
-        key = (b"" if shift is None else shift.tobytes()) + b"".join(c.A.tobytes() + c.b.tobytes() for c in fixed)
-        base = self._bases.get(key)
-        if base is None:
-            base = self._bases[key] = region_base(poly, fixed)
-            if len(self._bases) > _BASES:
-                self._bases.popitem(last=False)
-        return free_space_sampler(poly, obstacles, base=base)
-
-
-def prepare(poly: Polytope) -> Prepared:
-    """Prepare a region; raises EmptyRegionError / UnboundedRegionError."""
-    point = _pinned(poly)
-    if point is not None:
-        return Prepared(poly, None, point)
-    return Prepared(poly, prepare_sampler(poly))
-
-
-def _pinned(poly: Polytope) -> np.ndarray | None:
-    """The point three independent equality rows fix, if they do; EmptyRegionError if it violates a row."""
-    c = poly.C
-    if c.shape[0] < 3:
-        return None
-    if c.shape[0] == 3 and c[0, 0] == 1.0 and c[1, 1] == 1.0 and c[2, 2] == 1.0 and not np.any(c - np.diag(np.diag(c))):
-        point = poly.d.copy()  # `at V`: the identity rows, solved exactly
-    else:
-        _, s, _ = np.linalg.svd(c)
-        if s[2] <= 1e-9 * max(1.0, s[0]):
-            return None
-        point, *_ = np.linalg.lstsq(c, poly.d, rcond=None)
-    if not _satisfies(poly, point):
-        raise EmptyRegionError("the point fixed by the equalities violates a row")
-    return point
 
 
 def _empty(poly: Polytope) -> EmptyRegionError:
@@ -131,28 +39,6 @@ def _empty(poly: Polytope) -> EmptyRegionError:
     error = EmptyRegionError("the region is empty")
     error.rows = poly  # type: ignore[attr-defined]
     return error
-
-
-def _row_norms(poly: Polytope) -> tuple[np.ndarray, np.ndarray]:
-    """max(|row|, 1) of the inequality and equality rows (the tolerance scale)."""
-    return (
-        np.maximum(np.sqrt(np.einsum("ij,ij->i", poly.A, poly.A)), 1.0),
-        np.maximum(np.sqrt(np.einsum("ij,ij->i", poly.C, poly.C)), 1.0),
-    )
-
-
-def _satisfies(
-    poly: Polytope, p: np.ndarray, norms: tuple[np.ndarray, np.ndarray] | None = None, tol: float = TOL, skip_eq: bool = False
-) -> bool:
-    """Whether p meets every row of poly to within tol metres."""
-    if not len(poly.b) and (skip_eq or not len(poly.d)):
-        return True
-    an, cn = _row_norms(poly) if norms is None else norms
-    if len(poly.b) and np.any(poly.A @ p - poly.b > tol * an):
-        return False
-    if len(poly.d) and not skip_eq and np.any(np.abs(poly.C @ p - poly.d) > tol * cn):
-        return False
-    return True
 
 
 class _Translatable:
@@ -208,13 +94,19 @@ class RegionProvider:
     def _static_norms(self) -> tuple[np.ndarray, np.ndarray]:
         if self._norms is None:
             assert self.static_rows is not None
-            self._norms = _row_norms(self.static_rows)
+            self._norms = row_norms(self.static_rows)
         return self._norms
 
     @property
     def static_prepared(self) -> Prepared | None:
         """The region prepared once for every scene (static rows only), if already prepared."""
         return self._static
+
+    @property
+    def anchored_prepared(self) -> Prepared | None:
+        """The anchored rows' region prepared with the anchor at the origin, once `fixed_bounds` found
+        that the static rows never cut it (None otherwise)."""
+        return self._anchored if self._anchored_state == "ok" else None
 
     @property
     def mode(self) -> str:
@@ -258,9 +150,9 @@ class RegionProvider:
                 # `at V` with a random V: no preparation, just check the point.
                 which = next(i for i, r in enumerate(active) if r is self.point_rule)
                 point = dynamic[which].d
-                ok = all(_satisfies(poly, point, skip_eq=(i == which)) for i, poly in enumerate(dynamic))
+                ok = all(satisfies(poly, point, skip_eq=(i == which)) for i, poly in enumerate(dynamic))
                 if ok and self.static_rows is not None:
-                    ok = _satisfies(self.static_rows, point, self._static_norms())
+                    ok = satisfies(self.static_rows, point, self._static_norms())
                 if not ok:
                     raise _empty(intersect(*dynamic, *([] if self.static_rows is None else [self.static_rows])))
                 return Prepared(dynamic[which], None, point), None

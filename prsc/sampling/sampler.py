@@ -149,6 +149,21 @@ class Sampler:
         """The scene JSON of a sampled scene (for callers that also keep its statistics)."""
         return scene_json(self.spec, int(seed), int(index), result.params, result.objects, self.templates, self.classes)
 
+    def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
+        """index -> scene JSON under `seed`; a batched spec draws the next `ahead` indices at once and
+        hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once."""
+        drawn: dict[int, dict[str, Any]] = {}
+
+        def scene(index: int) -> dict[str, Any]:
+            if self._batch is None:
+                return self.scene(seed, index)
+            if index not in drawn:
+                drawn.clear()
+                drawn.update(zip(range(index, index + ahead), self.batch(seed, range(index, index + ahead))))
+            return drawn.pop(index)
+
+        return scene
+
     def batch_lines(self, seed: int, indices: Sequence[int]) -> list[str]:
         """Scenes `indices` under `seed` as scene JSON lines, each ending in a newline (what `prsc sample` writes)."""
         encode = scene_encoder()

@@ -153,3 +153,11 @@ def test_a_spec_that_is_not_batched_says_why(tmp_path, text, because):
     sampler = Sampler(compile_program(str(spec), ()), "exact")
     assert not sampler.batched
     assert because in sampler.unbatched_because
+
+
+def test_a_compile_worker_s_drawer_hands_out_the_same_scenes_in_any_order(sampler):
+    """`Sampler.drawer` (what compile jobs call) draws 64 scenes ahead: scene k is still scene k,
+    asked in order, out of order, or twice."""
+    drawer = sampler.drawer(3)
+    for k in (0, 1, 2, 70, 5, 5, 63, 64, 1000):
+        assert drawer(k) == sampler.scene(3, k), k

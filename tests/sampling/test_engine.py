@@ -148,14 +148,14 @@ def test_many_specifiers_spec_is_valid_under_exact_and_hit_and_run():
 def test_a_solver_failure_while_sampling_is_an_error_at_the_object(tmp_path, monkeypatch, name):
     """A region rebuilt per scene (random table size) whose LP fails numerically: exit 2 at the object."""
     from prsc.geometry.exceptions import GeometryError
-    from prsc.sampling import regions
+    from prsc.sampling import prepared
 
     sampler, _ = _sampler(tmp_path, "t = Table on Vector3D(0, 0, 0), with width (1, 2)\nc = Cube completely on t\n", name)
 
     def failing(poly):
         raise GeometryError("HiGHS failed on a 12x4 LP: Not Set")
 
-    monkeypatch.setattr(regions, "prepare_sampler", failing)
+    monkeypatch.setattr(prepared, "prepare_sampler", failing)
     with pytest.raises(PrscError, match="cannot place c: its constraints could not be solved numerically") as info:
         sampler.sample(0, 0)
     assert (info.value.span.line, info.value.span.column) == (3, 1)

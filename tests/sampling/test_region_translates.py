@@ -18,7 +18,8 @@ import numpy as np
 import prsc.sampling.regions as regions
 from prsc.geometry.polytope import Polytope
 from prsc.sampling import compile_sampler
-from prsc.sampling.regions import _Translatable, prepare
+from prsc.sampling.prepared import prepare
+from prsc.sampling.regions import _Translatable
 
 REPO = Path(__file__).resolve().parents[2]
 
