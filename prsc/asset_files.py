@@ -73,8 +73,9 @@ class ArticulatedAsset:
     actuators: tuple[str, ...]
     sites: tuple[str, ...]
     tcp: str | None  # the tool frame: a site named `tcp`, else the last link of the longest chain
-    box_low: tuple[float, float, float]  # collision geometry's box about the root's origin, at home
+    box_low: tuple[float, float, float]  # the geometry's box (drawn and colliding) about the root's origin, at home
     box_high: tuple[float, float, float]
+    fixed: bool = False  # a URDF whose root link has mass 0: fixed in the world, as pybullet loads it
 
     @property
     def key(self) -> str:
@@ -340,7 +341,9 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
     data = mujoco.MjData(model)
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)
-    geoms = [g for g in range(model.ngeom) if model.geom_contype[g] or model.geom_conaffinity[g]] or list(range(model.ngeom))
+    # Every geom, drawn or colliding: pybullet's table.urdf collides with its top only, and its
+    # legs, visual only, must stand on what the table is placed on.
+    geoms = list(range(model.ngeom))
     if not geoms:
         raise PrscError(f"{path.name} has no geometry")
     # The box is axis-aligned in the file's own axes, about the root body's origin: an MJCF
@@ -367,7 +370,18 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
         actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
         tcp=_tool_frame(model, sites), box_low=tuple(float(v) for v in points.min(axis=0)),  # type: ignore[arg-type]
         box_high=tuple(float(v) for v in points.max(axis=0)),  # type: ignore[arg-type]
+        fixed=path.suffix.lower() == ".urdf" and _massless_root(path, model.body(root).name),
     )
+
+
+def _massless_root(path: Path, root: str) -> bool:
+    """Whether a URDF's root link declares a mass of 0: pybullet's fixed base (its table.urdf and tray.urdf)."""
+    link = next((e for e in ET.parse(path).getroot().iter("link") if e.get("name") == root), None)
+    mass = None if link is None else link.find("inertial/mass")
+    try:
+        return mass is not None and float(mass.get("value", "nan")) == 0.0
+    except ValueError:
+        return False
 
 
 def _tool_frame(model, sites: tuple[str, ...]) -> str | None:

@@ -95,7 +95,8 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
             raise PrscError(f"{obj.name}: tcp {shown!r} is no link or site of {model.value}"
                             f"{did_you_mean(shown, (*asset.links, *asset.sites))}", tcp.span)
     static = props.get("static")
-    if asset.has_joints and (static is None or static.span.path == BUILTIN_SPAN.path):
+    # Fixed unless `static False`: an arm, or a URDF whose root has mass 0 (pybullet's fixed base).
+    if (asset.has_joints or asset.fixed) and (static is None or static.span.path == BUILTIN_SPAN.path):
         props["static"] = ir.Const(model.span, ir.Type.BOOL, True)
     for prop, value in obj.properties:
         joint = joint_name(prop)

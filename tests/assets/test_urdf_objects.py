@@ -1,7 +1,8 @@
-"""A URDF of one link and no joints is a rigid free object (docs/assets.md): pybullet's
-random_urdfs blobs (whose inertia no simulator accepts: prsc takes it from the geometry,
-and says so) and its tray, sized by their collision meshes, placed on a table, compiled
-to every format; in MuJoCo they come to rest, and pybullet loads them as free bodies."""
+"""A URDF of one link and no joints is a rigid object (docs/assets.md), free unless its root
+link has mass 0 (pybullet's fixed base: its tray and table): pybullet's random_urdfs blobs
+(whose inertia no simulator accepts: prsc takes it from the geometry, and says so) and its
+tray, sized by their geometry, placed on a table, compiled to every format; in MuJoCo they
+come to rest, and pybullet loads the blobs as free bodies."""
 
 from __future__ import annotations
 
@@ -120,3 +121,36 @@ def _keeps_the_urdf_colour(root: Path, name: str, urdf: Path) -> None:
     drawn = [UsdGeom.Gprim(p).GetDisplayColorAttr().Get() for p in Usd.PrimRange(stage.GetPrimAtPath(f"/World/{name}"))
              if p.IsA(UsdGeom.Gprim) and UsdGeom.Imageable(p).ComputePurpose() != UsdGeom.Tokens.guide]
     assert drawn and all(abs(c - d) < 1e-6 for value in drawn for c, d in zip(value[0], colour[:3]))
+
+
+def test_a_massless_urdf_root_is_fixed_and_stands_on_its_visual_legs(tmp_path):
+    """pybullet's table.urdf: its root link has mass 0 (pybullet's fixed base) and collides with its
+    top only, its legs being visual. prsc keeps it static unless told otherwise, and its box is its
+    whole geometry, so the legs stand on the floor and a cube `on` it rests on the top."""
+    import mujoco
+
+    spec = tmp_path / "table.prs"
+    spec.write_text("from tabletop import *\nclass PbTable:\n    model: \"table/table.urdf\"\n"
+                    "t = PbTable on Vector3D(0, 0, 0)\nc = Cube on t\nfree = PbTable on Vector3D(1.6, 0, 0), with static False\n")
+    done = subprocess.run([sys.executable, "-m", "prsc.cli", "compile", str(spec), "-I", str(DATA), "-n", "1",
+                           "--target", "json,mjcf", "-o", str(tmp_path / "out")], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    root = tmp_path / "out" / "table"
+    objects = {o["name"]: o for o in json.loads((root / "json" / "00000.json").read_text())["objects"]}
+    assert objects["t"]["static"] and not objects["free"]["static"]
+    assert objects["t"]["dimensions"][2] == pytest.approx(0.625, abs=1e-6)  # legs 0.58 m and the top 0.05 m, from 0 to 0.625
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    table = model.body("t").id
+    lowest = min(data.geom_xpos[g][2] + (model.mesh_vert[model.mesh_vertadr[model.geom_dataid[g]]:
+                                                          model.mesh_vertadr[model.geom_dataid[g]] + model.mesh_vertnum[model.geom_dataid[g]]]
+                                         @ data.geom_xmat[g].reshape(3, 3).T)[:, 2].min()
+                 for g in range(model.ngeom)
+                 if model.body_rootid[model.geom_bodyid[g]] == table and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH)
+    assert lowest == pytest.approx(0.0, abs=1e-6)  # the legs' feet on the floor, not below it
+    start = data.xpos[model.body("c").id].copy()
+    for _ in range(300):
+        mujoco.mj_step(model, data)
+    assert start[2] == pytest.approx(0.625 + objects["c"]["dimensions"][2] / 2, abs=1e-3)
+    assert abs(data.xpos[model.body("c").id][2] - start[2]) < 0.005  # rests on the top
