@@ -54,6 +54,11 @@ class ArmFrames:
             tool=tool_id, tool_is_site=is_site,
         )
 
+    def heading(self, data, root: np.ndarray) -> float:
+        """The azimuth of the tool about the point `root` (the arm's root) in `data` (after kinematics)."""
+        tool = self.tool_pose(data)[0] - root
+        return math.atan2(tool[1], tool[0])
+
     def tool_pose(self, data) -> tuple[np.ndarray, np.ndarray]:
         """The tool's world position and rotation matrix in `data` (after kinematics)."""
         if self.tool_is_site:

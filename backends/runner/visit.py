@@ -69,8 +69,7 @@ class Visit:
         # Where the tool heads at home, about the arm's root: each cube is sought from home
         # turned towards it, as `reachable by` sought it (prsc/constraints/arm_reach.py).
         root = data.xpos[model.body(prefix + asset.root).id]
-        tool = arm.tool_pose(data)[0] - root
-        heading = math.atan2(tool[1], tool[0])
+        heading = arm.heading(data, root)
         worst = 0.0
         q = home
         for cube in _cubes(scene):

@@ -65,8 +65,7 @@ class TopDownIK:
         self.data.qpos[self.arm.qpos] = self.home
         mujoco.mj_kinematics(self.model, self.data)
         self.root = self.data.xpos[self.model.body(asset.root).id].copy()
-        tool = self.arm.tool_pose(self.data)[0] - self.root
-        self.heading = math.atan2(tool[1], tool[0])  # where the tool points at home
+        self.heading = self.arm.heading(self.data, self.root)  # where the tool points at home
 
     def reaches(self, point: np.ndarray, seed: np.ndarray, restarts: int = 0) -> tuple[np.ndarray, bool]:
         """Whether the tool reaches the point (root frame) and the approach above it, top-down,

@@ -33,11 +33,10 @@ from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchCompiler, BatchState, BatchValue, Unbatchable
-from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.obb import collides_many
 from prsc.sampling.collisions import CONTACT_TOL, PlacedBox, near, obstacles_for
 from prsc.sampling.counter_stream import scene_keys, uniforms
-from prsc.sampling.prepared import TOL
+from prsc.sampling.prepared import TOL, Prepared
 from prsc.sampling.runtime import ObjectRuntime
 
 _LIMIT = 1 << 64  # seeds and scene indices are unsigned 64-bit counters of the stream
@@ -56,7 +55,7 @@ class BatchObject:
     region: UniformSampler | None = None  # drawn uniformly from it (plus the anchor's centre when anchored)
     anchor: str | None = None
     point: BatchValue | None = None  # `at V`
-    rows: Polytope | None = None  # the region's rows (relative to the anchor), for a scene's own free space
+    prepared: Prepared | None = None  # a carried region prepared about its anchor: each scene's own free space
     avoids: frozenset[str] = frozenset()  # fixed objects whose boxes `region` already leaves out
     # Fixed boxes an anchored object may meet in some scenes: tested per scene, and a scene whose
     # draw hits one draws again from its own free space (the sequential sampler's law, below).
@@ -79,6 +78,11 @@ class BatchPlan:
 
     objects: tuple[BatchObject, ...]
     params: tuple[tuple[str, Any], ...]  # name -> a constant JSON value or a BatchValue
+
+    @property
+    def fixed_params(self) -> bool:
+        """Whether every parameter has the same value in every scene."""
+        return not any(isinstance(value, BatchValue) for _, value in self.params)
 
 
 def batch_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) -> BatchPlan:
@@ -133,7 +137,7 @@ def _batch_object(rt: ObjectRuntime, compiler: BatchCompiler, placed: list[Batch
             return BatchObject(name, *shape, _corners(prepared.sampler), region=prepared.sampler)
         # The sequential sampler's static free space (engine.SequentialSampler._static_free_space):
         # the region minus the fixed boxes it could meet, decomposed once.
-        free = free_space_sampler(prepared.poly, obstacles_for(near_fixed, rt.rotation, rt.half))
+        free = prepared.free_space(None, obstacles_for(near_fixed, rt.rotation, rt.half))
         return BatchObject(name, *shape, _corners(free), region=free, avoids=frozenset(q.name for q in near_fixed))
     except EmptyRegionError:
         raise Unbatchable(f"{name} has no free place") from None
@@ -181,7 +185,7 @@ def _anchored(rt: ObjectRuntime, placed: dict[str, BatchObject]) -> BatchObject:
     if static is not None and not _inside(static, carried, margin=2 * TOL):
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
     return BatchObject(name, rt.rotation, rt.half, rt.reach, carried, region=prepared.sampler,  # type: ignore[arg-type]
-                       anchor=anchor, rows=prepared.poly)
+                       anchor=anchor, prepared=prepared)
 
 
 def _separated(item: BatchObject, placed: list[BatchObject], rt: ObjectRuntime,
@@ -264,27 +268,26 @@ class BatchedSampler:
                 m = len(close)
                 hit[close] |= collides_many(box.box, centre[close], np.broadcast_to(item.rotation, (m, 3, 3)),
                                             np.broadcast_to(item.half, (m, 3)))
-        assert item.anchor is not None and item.rows is not None and item.region is not None
+        assert item.anchor is not None and item.prepared is not None
+        obstacles = obstacles_for(list(item.checks), item.rotation, item.half) if hit.any() else []
         for i in np.flatnonzero(hit):
-            shift = state.positions[item.anchor][i]
             try:
-                free = free_space_sampler(item.rows.translate(shift), obstacles_for(list(item.checks), item.rotation, item.half))
+                free = item.prepared.free_space(state.positions[item.anchor][i], obstacles)
             except EmptyRegionError:
                 raise PrscError(f"could not sample scene {int(indices[i])} (seed {seed}): {item.name} has no free place "
                                 f"on {item.anchor} there") from None
             centre[i] = free.points(uniforms(state.keys[i:i + 1], 4 * k + 2, free.dim + 1))[0]
 
-    def params(self, state: BatchState, i: int) -> dict[str, Any]:
-        """Scene i's parameter values (plain JSON data)."""
-        out: dict[str, Any] = {}
+    def params(self, state: BatchState) -> list[dict[str, Any]]:
+        """Each scene's parameter values (plain JSON data), every parameter evaluated once for the batch."""
+        columns: list[tuple[str, Any, bool]] = []  # (name, value or per-scene rows, whether per scene)
         for name, value in self.plan.params:
             if isinstance(value, BatchValue):
-                row = value.fn(state)
-                row = row[i if len(row) > 1 else 0]
-                out[name] = row.tolist() if value.vector else float(row[0])
+                rows = np.broadcast_to(value.fn(state), (len(state.keys), 3 if value.vector else 1)).tolist()
+                columns.append((name, rows if value.vector else [row[0] for row in rows], True))
             else:
-                out[name] = float(value) if isinstance(value, int) and not isinstance(value, bool) else value
-        return out
+                columns.append((name, float(value) if isinstance(value, int) and not isinstance(value, bool) else value, False))
+        return [{name: value[i] if per_scene else value for name, value, per_scene in columns} for i in range(len(state.keys))]
 
     def objects(self, state: BatchState, i: int, runtimes: Sequence[ObjectRuntime]) -> tuple[list[ObjectValue], SceneContext]:
         """Scene i of a batch as the sequential sampler returns it: object values and a context holding its draws."""

@@ -18,7 +18,7 @@ from prsc.constraints.lower import lower_program
 from prsc.constraints.model import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir.program import Program
-from prsc.sampling.batch_values import BatchValue, Unbatchable
+from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchedSampler, batch_plan
 from prsc.sampling.gibbs import DEFAULT_SWEEPS
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
@@ -120,7 +120,7 @@ class Sampler:
             return self._engine.sample(seed, index)
         state = self._batch.draw(seed, [index])
         objects, ctx = self._batch.objects(state, 0, self._engine.runtimes)  # type: ignore[union-attr]
-        return SceneResult(objects, self._batch.params(state, 0), RejectionStats(scenes=1), ctx)
+        return SceneResult(objects, self._batch.params(state)[0], RejectionStats(scenes=1), ctx)
 
     def scene(self, seed: int, index: int) -> dict[str, Any]:
         """Scene `index` under `seed` as scene JSON (docs/scene-json.md)."""
@@ -138,9 +138,9 @@ class Sampler:
         spec, seed, classes = self.spec, int(seed), self.classes
         parts = list(zip(self.templates, positions, self._quaternions))
         out = []
-        for i, index in enumerate(indices):
+        for i, (index, values) in enumerate(zip(indices, self._batch.params(state))):
             params = {"ground": True}
-            params.update({k: json_value(v) for k, v in self._batch.params(state, i).items()})
+            params.update({k: json_value(v) for k, v in values.items()})
             objects = [placed_template(t, p[i], list(q)) for t, p, q in parts]  # type: ignore[arg-type]
             out.append(scene_dict(spec, seed, int(index), params, objects, classes))
         return out
@@ -167,7 +167,7 @@ class Sampler:
     def batch_lines(self, seed: int, indices: Sequence[int]) -> list[str]:
         """Scenes `indices` under `seed` as scene JSON lines, each ending in a newline (what `prsc sample` writes)."""
         encode = scene_encoder()
-        if self._batch is None or any(isinstance(v, BatchValue) for _, v in self._batch.plan.params):
+        if self._batch is None or not self._batch.plan.fixed_params:
             return [encode(scene) + "\n" for scene in self.batch(seed, indices)]
         objects = self._batch.plan.objects
         if self._text is None:
