@@ -24,7 +24,7 @@ from prsc.assets.urdf_tree import Joint, RobotTree, read_urdf
 from prsc.files import atomic_path
 from prsc.geometry.rotations import matrix_to_quat
 
-RECIPE_VERSION = "2"  # 2: URDF boxes, cylinders and spheres converted too
+RECIPE_VERSION = "3"  # 2: URDF boxes, cylinders and spheres converted too; 3: joint states
 
 # Drive gains per unit of joint motion: angular drives in USD are per degree.
 _ANGULAR_STIFFNESS = 1000.0 * math.pi / 180  # N m / deg
@@ -59,6 +59,25 @@ def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float], drives
 def drive_attribute(joint: Joint) -> str:
     """The attribute of a joint's drive target (`drive:angular:...` in degrees, `linear` in m)."""
     return f"drive:{'linear' if joint.type == 'prismatic' else 'angular'}:physics:targetPosition"
+
+
+def state_attribute(joint: Joint) -> str:
+    """The attribute of a joint's starting value (`state:angular:...` in degrees, `linear` in m).
+
+    UsdPhysics has no joint state; this is PhysX's JointStateAPI, which Isaac Sim reads and
+    Newton reads with its PhysX schema resolver. A reduced-coordinate simulator starts each
+    joint there; the links' poses say the same for one that reads maximal coordinates."""
+    return f"state:{'linear' if joint.type == 'prismatic' else 'angular'}:physics:position"
+
+
+def joint_state_schema(joint: Joint) -> str:
+    """The applied schema that carries `state_attribute` (multiple-apply, one per axis kind)."""
+    return f"PhysxJointStateAPI:{'linear' if joint.type == 'prismatic' else 'angular'}"
+
+
+def usd_joint_value(joint: Joint, value: float) -> float:
+    """A joint value in USD's units: degrees for a revolute joint, metres for a prismatic one."""
+    return float(value) if joint.type == "prismatic" else math.degrees(value)
 
 
 def _quatd(matrix: np.ndarray):
@@ -202,14 +221,17 @@ def _joint(stage, root: str, joint: Joint, home: dict[str, float], drives: bool)
     usd.CreateLocalRot0Attr(_quatf(joint.origin[:3, :3] @ frame))
     usd.CreateLocalPos1Attr(Gf.Vec3f(0.0, 0.0, 0.0))
     usd.CreateLocalRot1Attr(_quatf(frame))
+    if joint.type != "fixed":
+        usd.GetPrim().AddAppliedSchema(joint_state_schema(joint))
+        usd.GetPrim().CreateAttribute(state_attribute(joint), Sdf.ValueTypeNames.Float).Set(
+            usd_joint_value(joint, home.get(joint.name, 0.0)))
     if drives and joint.type in ("revolute", "continuous", "prismatic"):
         angular = joint.type != "prismatic"
         drive = UsdPhysics.DriveAPI.Apply(usd.GetPrim(), "angular" if angular else "linear")
         drive.CreateTypeAttr("force")
         drive.CreateStiffnessAttr(_ANGULAR_STIFFNESS if angular else _LINEAR_STIFFNESS)
         drive.CreateDampingAttr(_ANGULAR_DAMPING if angular else _LINEAR_DAMPING)
-        target = home.get(joint.name, 0.0)
-        drive.CreateTargetPositionAttr(math.degrees(target) if angular else target)
+        drive.CreateTargetPositionAttr(usd_joint_value(joint, home.get(joint.name, 0.0)))
         if joint.effort:
             drive.CreateMaxForceAttr(joint.effort)
 

@@ -266,10 +266,11 @@ def _robot_reference(layer, body: Body, asset: Path, folder: Path) -> None:
 
 def _joint_values(layer, path: str, body: Body) -> None:
     """Over the asset (posed at its home): every link where the scene's joint values put it,
-    and each drive's target there (a drawer pulled out, an arm in its scene posture)."""
+    each joint's starting value and each drive's target there (a drawer pulled out, an arm
+    in its scene posture)."""
     from pxr import Gf, Sdf
 
-    from prsc.assets.robot_usd import drive_attribute
+    from prsc.assets.robot_usd import drive_attribute, state_attribute, usd_joint_value
     from prsc.geometry.rotations import matrix_to_quat
 
     robot = body.robot
@@ -284,14 +285,15 @@ def _joint_values(layer, path: str, body: Body) -> None:
             Gf.Vec3d(*(float(v) for v in pose[:3, 3]))
         w, x, y, z = (float(v) for v in matrix_to_quat(pose[:3, :3]))
         Sdf.AttributeSpec(link, "xformOp:orient", Sdf.ValueTypeNames.Quatd).default = Gf.Quatd(w, Gf.Vec3d(x, y, z))
-    if robot.passive:
-        return
     for joint in tree.joints:
-        if joint.type in ("revolute", "continuous", "prismatic") and joint.name in values:
-            spec = Sdf.CreatePrimInLayer(layer, f"{path}/joints/{joint.name}")
-            spec.specifier = Sdf.SpecifierOver
-            value = values[joint.name] if joint.type == "prismatic" else math.degrees(values[joint.name])
-            Sdf.AttributeSpec(spec, drive_attribute(joint), Sdf.ValueTypeNames.Float).default = float(value)
+        if joint.type not in ("revolute", "continuous", "prismatic") or joint.name not in values:
+            continue
+        spec = Sdf.CreatePrimInLayer(layer, f"{path}/joints/{joint.name}")
+        spec.specifier = Sdf.SpecifierOver
+        value = usd_joint_value(joint, values[joint.name])
+        Sdf.AttributeSpec(spec, state_attribute(joint), Sdf.ValueTypeNames.Float).default = value
+        if not robot.passive:
+            Sdf.AttributeSpec(spec, drive_attribute(joint), Sdf.ValueTypeNames.Float).default = value
 
 
 def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:

@@ -130,6 +130,11 @@ def test_every_format_carries_the_cabinet(compiled):
         assert sum(1 for p in Usd.PrimRange(drawer) if p.IsA(UsdGeom.Cube)) == 10  # 5 boxes, seen and colliding
         slide = next(p for p in stage.Traverse() if p.GetName() == "drawer_slide")
         assert slide.IsA(UsdPhysics.PrismaticJoint) and not slide.HasAPI(UsdPhysics.DriveAPI)
+        # Newton starts the drawer at the scene's value, with the links where the stage draws them.
+        loaded = readback.newton_load(compiled / "usd" / f"{k:05d}.usda")
+        value = data.qpos[model.joint("cab/drawer_slide").qposadr[0]]
+        assert loaded["joints"]["drawer_slide"] == pytest.approx(value, abs=1e-6)
+        assert loaded["fk_gap"] < 1e-5 and {"cube", "box"} <= loaded["free"]
         readback.urdf_validate(compiled / "urdf" / f"{k:05d}")
         poses = readback.sdf_poses(compiled / "sdf" / f"{k:05d}.sdf")
         assert {"cab", "cube", "box"} <= set(poses)

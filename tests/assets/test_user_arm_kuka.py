@@ -7,6 +7,7 @@ import pytest
 
 from tests.assets.test_user_arms import (  # noqa: F401  (the same checks, collected here for the KUKA)
     compiled_arm,
+    test_newton_loads_the_usd_with_every_joint_where_the_scene_starts_it,
     test_mjcf_has_every_joint_and_holds_the_scene_joint_values,
     test_reachable_cubes_are_reached_top_down_on_the_compiled_model,
     test_the_example_controller_drives_every_arm_by_its_own_names,

@@ -6,7 +6,8 @@ and a small actuated MJCF arm written here, compiled through the CLI to every fo
   actuators) while the cubes around it stay put;
 - the URDF bundle loads in pybullet with every joint, and its scene.json states where each
   starts; pybullet's SDF import loads the arm with its joints; the USD validates and holds
-  a revolute joint per arm joint under one articulation root;
+  a revolute joint per arm joint under one articulation root, and Newton loads it with every
+  joint at the scene's value;
 - `reachable by` cubes are reached top-down by an IK solve on the compiled MuJoCo model
   (scipy's least squares, not prsc's own IK) within 5 mm and 0.05 rad.
 """
@@ -183,6 +184,18 @@ def test_urdf_bundle_sdf_and_usd_carry_every_joint(arm_output):
     for prim in driven:
         target = UsdPhysics.DriveAPI(prim, "angular").GetTargetPositionAttr().Get()
         assert target == pytest.approx(np.degrees(values[prim.GetName()]), abs=1e-4)
+
+
+def test_newton_loads_the_usd_with_every_joint_where_the_scene_starts_it(arm_output):
+    name, joints, root, scenes = arm_output
+    for k, scene in enumerate(scenes):
+        loaded = readback.newton_load(root / "usd" / f"{k:05d}.usda")
+        wanted = _arm(scene)["joints"]
+        assert len(wanted) == joints
+        assert {j: loaded["joints"].get(j) for j in wanted} == pytest.approx(wanted, abs=1e-6), f"{name} scene {k}"
+        # Newton's forward kinematics from those values puts every link where the stage draws it.
+        assert loaded["fk_gap"] < 1e-5, f"{name} scene {k}: a body {loaded['fk_gap']:.2e} m off"
+        assert "table" in loaded["kinematic"] and {"c1", "c2", "c3"} <= loaded["free"]
 
 
 def _top_down_ik(model, data, tool, is_site: bool, qadr: np.ndarray, target: np.ndarray, start: np.ndarray):

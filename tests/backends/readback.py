@@ -197,6 +197,36 @@ def usd_errors(path: Path) -> list[str]:
     return [f"{e.GetName()}: {e.GetMessage()}" for e in errors if e.GetType() == UsdValidation.ValidationErrorType.Error]
 
 
+def newton_load(path: Path) -> dict:
+    """Load a USD stage in Newton (CPU) with its PhysX schema resolver, which reads the joints'
+    starting values: {"joints": name -> value (rad or m), "kinematic": body names,
+    "free": bodies on a free joint, "fk_gap": largest distance (m) between a body placed by
+    Newton's forward kinematics from its joint values and the stage's own pose of it}."""
+    import warp as wp
+
+    wp.config.quiet = True
+    import newton
+    from newton.usd import SchemaResolverNewton, SchemaResolverPhysx
+    from pxr import Usd, UsdGeom
+
+    builder = newton.ModelBuilder()
+    builder.add_usd(str(path), schema_resolvers=[SchemaResolverNewton(), SchemaResolverPhysx()])
+    model = builder.finalize(device="cpu")
+    q, starts, kinds = model.joint_q.numpy(), model.joint_q_start.numpy(), model.joint_type.numpy()
+    moving = (int(newton.JointType.REVOLUTE), int(newton.JointType.PRISMATIC))
+    joints = {label.rsplit("/", 1)[-1]: float(q[starts[j]]) for j, label in enumerate(model.joint_label) if kinds[j] in moving}
+    state = model.state()
+    newton.eval_fk(model, model.joint_q, model.joint_qd, state)
+    placed = state.body_q.numpy()
+    stage, cache = Usd.Stage.Open(str(path)), UsdGeom.XformCache()
+    gap = max(float(np.linalg.norm(np.array(cache.GetLocalToWorldTransform(stage.GetPrimAtPath(label))).T[:3, 3] - placed[b, :3]))
+              for b, label in enumerate(model.body_label))
+    flags, child = model.body_flags.numpy(), model.joint_child.numpy()
+    kinematic = {label.rsplit("/", 1)[-1] for b, label in enumerate(model.body_label) if flags[b] & int(newton.BodyFlags.KINEMATIC)}
+    free = {model.body_label[child[j]].rsplit("/", 1)[-1] for j in range(model.joint_count) if kinds[j] == int(newton.JointType.FREE)}
+    return {"joints": joints, "kinematic": kinematic, "free": free, "fk_gap": gap}
+
+
 def usd_poses(path: Path, scene: dict) -> dict[str, tuple]:
     """World transform of /World/<object> for every object."""
     from pxr import Usd, UsdGeom
