@@ -23,6 +23,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
+from prsc.asset_inertia import drop_invalid_inertias, unbalanced
 from prsc.errors import PrscError
 from prsc.mesh_paths import mujoco_readable_meshes
 
@@ -126,6 +127,19 @@ def _package_path(uri: str, urdf: Path, folders: Sequence[str]) -> str:
                     "in its parent folders or in the --include folders")
 
 
+def _refuse_xacro(root: ET.Element, path: Path) -> None:
+    """A URDF that still holds xacro (`$(arg x)`, `${expr}`: husky.urdf's IMU) is refused at the
+    first such value, with its line: MuJoCo would only say "bad format in attribute"."""
+    for element in root.iter():
+        for key, value in element.attrib.items():
+            if "$(" in value or "${" in value:
+                text = path.read_text(errors="replace")
+                at = text.find(value)
+                line = f" line {text.count(chr(10), 0, at) + 1}," if at >= 0 else ""
+                raise PrscError(f"{path.name}:{line} <{element.tag} {key}=\"{value}\"> is a xacro expression, not a value; "
+                                "expand the file with xacro first (`xacro robot.urdf.xacro > robot.urdf`)")
+
+
 def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
     """The URDF's root element with every mesh path absolute (`package://` resolved)."""
     try:
@@ -134,6 +148,7 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
         raise PrscError(f"cannot read URDF {path.name}: {error}") from None
     if root.tag != "robot":
         raise PrscError(f"{path.name} is not a URDF (its root element is <{root.tag}>, not <robot>)")
+    _refuse_xacro(root, path)
     for mesh in root.iter("mesh"):
         filename = mesh.get("filename", "")
         if filename.startswith("package://"):
@@ -144,7 +159,7 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
         if not os.path.isfile(filename):
             raise PrscError(f"{path.name}: mesh {mesh.get('filename')!r} not found ({filename})")
         mesh.set("filename", filename)
-    _drop_invalid_inertias(root, path)
+    drop_invalid_inertias(root, path)
     # A root link named "world" fixed to one child is ROS's way of saying "fixed base";
     # prsc mounts the asset itself, so the child is the root in every format.
     world = [j for j in root.findall("joint") if j.find("parent") is not None and j.find("parent").get("link") == "world"]
@@ -156,73 +171,12 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
     return root
 
 
-class AssetFixWarning(UserWarning):
-    """prsc changed something in a user's asset file so that simulators load it (said once per file)."""
-
-
-def _principal_moments(link: ET.Element) -> tuple[float, list[float]] | None:
-    """(mass, ascending principal moments) of a link's inertial, None when it has none or it is unreadable."""
-    import numpy as np
-
-    inertial = link.find("inertial")
-    if inertial is None:
-        return None
-    mass, inertia = inertial.find("mass"), inertial.find("inertia")
-    try:
-        m = float(mass.get("value", "0")) if mass is not None else 0.0
-        i = {k: float(inertia.get(k, "0")) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")} if inertia is not None else {}
-    except ValueError:
-        return 0.0, [0.0, 0.0, 0.0]
-    if not i:
-        return m, [0.0, 0.0, 0.0]
-    tensor = np.array([[i["ixx"], i["ixy"], i["ixz"]], [i["ixy"], i["iyy"], i["iyz"]], [i["ixz"], i["iyz"], i["izz"]]])
-    return m, [float(v) for v in np.linalg.eigvalsh(tensor)]
-
-
-def _unbalanced(link: ET.Element) -> bool:
-    """Whether a link's principal moments break the triangle inequality (A + B < C), as the xArm's link2."""
-    found = _principal_moments(link)
-    return found is not None and found[1][0] > 0 and found[1][0] + found[1][1] < found[1][2] * (1 - 1e-9)
-
-
-def _say_once(path: Path, message: str) -> None:
-    """One AssetFixWarning per file and message."""
-    import warnings
-
-    if (str(path), message) not in _warned_files:
-        _warned_files.add((str(path), message))
-        warnings.warn(AssetFixWarning(f"{path.name}: {message}"), stacklevel=3)
-
-
-def _drop_invalid_inertias(root: ET.Element, path: Path) -> None:
-    """Remove `<inertial>`s whose mass or inertia no simulator accepts (the random_urdfs'
-    izz = 0); those links get mass and inertia from their geometry (MuJoCo's
-    inertiafromgeom, density 1000 kg/m^3), and the user is told once."""
-    unbalanced = [link.get("name", "?") for link in root.findall("link") if _unbalanced(link)]
-    if unbalanced:
-        _say_once(path, f"links {', '.join(unbalanced)} have inertias that break the triangle inequality; "
-                        "balanced as MuJoCo's balanceinertia does, in every format")
-    dropped = []
-    for link in root.findall("link"):
-        found = _principal_moments(link)
-        if found is not None and (found[0] <= 0 or found[1][0] <= 0):
-            link.remove(link.find("inertial"))
-            dropped.append(link.get("name", "?"))
-    if dropped:
-        _say_once(path, f"links {', '.join(dropped)} have a mass or inertia no simulator accepts; "
-                        "prsc computes theirs from their geometry (1000 kg/m^3)")
-
-
-_warned_files: set[tuple[str, str]] = set()
-
-
 def urdf_with_absolute_paths(path: Path, folders: Sequence[str] = ()) -> str:
     """The URDF's text with every mesh path absolute, for any URDF reader; a link whose
     inertial was dropped gets the one MuJoCo computes from its geometry, so every format
     carries the same masses."""
     root = _urdf_tree(path, folders)
-    unbalanced = [link for link in root.findall("link") if _unbalanced(link)]
-    for link in unbalanced:
+    for link in [link for link in root.findall("link") if unbalanced(link)]:
         link.remove(link.find("inertial"))
     missing = [link for link in root.findall("link") if link.find("inertial") is None]
     if missing:

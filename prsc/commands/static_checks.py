@@ -37,7 +37,7 @@ def compile_checked(path: str, include_dirs: Sequence[str] = (), **opts: Any) ->
     import sys
     import warnings
 
-    from prsc.asset_files import AssetFixWarning
+    from prsc.asset_inertia import AssetFixWarning
     from prsc.sampling import compile_sampler
 
     with warnings.catch_warnings(record=True) as caught:

@@ -1,6 +1,6 @@
 """A user's asset that cannot be used is an error at the line that names it, from `prsc
 check` as from `prsc compile` (exit code 2, `file:line:col`, a caret, nothing written):
-a missing or unparsable file, a `package://` that resolves nowhere, a joint the file does
+a missing or unparsable file, a `package://` that resolves nowhere, xacro left in a URDF, a joint the file does
 not have or a value outside its limits, a size the file decides, `reachable by` on an
 object that is not a robot and `with joint` on one without a file. The original model
 library's `model_name: "Panda"` is a robot for `reachable by`."""
@@ -32,6 +32,8 @@ CASES = {
                            "the height of an asset from a file is the file's"),
     "reachable by a cube": ("b = Cube at Vector3D(0, 0, 0.02)\nc = Cube at Vector3D(0.3, 0, 0.02), reachable by b",
                             5, 37, "'reachable by' needs a robot"),
+    "xacro left in a URDF": ('arm = Arm at Vector3D(0, 0, 0.3), with model "xacro.urdf"', 4, 46,
+                             'xacro.urdf: line 3, <origin xyz="$(optenv IMU_XYZ 0.19 0 0.149)"> is a xacro expression'),
     "joint without a file": ('c = Cube at Vector3D(0.3, 0, 0.02), with joint "x" 1', 4, 52,
                              "`with joint` needs an object whose model is a URDF or MJCF file"),
 }
@@ -47,6 +49,9 @@ def folder(tmp_path):
     (tmp_path / "broken.urdf").write_text("<robot name='x'><link name='a'>\n")
     (tmp_path / "pkg.urdf").write_text('<robot name="p"><link name="a"><visual><geometry>'
                                        '<mesh filename="package://nowhere/m.obj"/></geometry></visual></link></robot>\n')
+    # husky.urdf's IMU, as pybullet ships it: MuJoCo only says "bad format in attribute 'xyz'".
+    (tmp_path / "xacro.urdf").write_text('<robot name="x">\n<link name="a"/><link name="b"/>\n<joint name="j" type="fixed">'
+                                         '<origin xyz="$(optenv IMU_XYZ 0.19 0 0.149)"/>\n<parent link="a"/><child link="b"/></joint></robot>\n')
     return tmp_path
 
 
