@@ -17,7 +17,7 @@ from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore, texture_of
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior, declared_interior
-from prsc.mesh_paths import MESH_COLLISIONS, mesh_folders, resolve_mesh
+from prsc.mesh_paths import MESH_COLLISIONS, TEXTURED_SHAPES, mesh_folders, resolve_mesh
 
 CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
 """Rotation (w x y z, object frame) of a camera that looks along its local -Z with +Y up
@@ -166,13 +166,13 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
 
 
 def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
-    """`with texture`: the image on every face of the object's visible boxes."""
+    """`with texture`: the image on the object's visible boxes, cylinders and spheres."""
     source = resolve_mesh_source(obj, scene, store, "texture")
     try:
         image = str(store.texture_image(source))
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
-    return tuple(replace(p, texture=image) if p.shape == "box" and p.visible else p for p in parts)
+    return tuple(replace(p, texture=image) if p.shape in TEXTURED_SHAPES and p.visible else p for p in parts)
 
 
 def resolve_bodies(scene: Scene, store: AssetStore) -> tuple[Body, ...]:

@@ -22,6 +22,7 @@ from prsc.assets.articulated import robot_tree
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
 from prsc.backends.scene import Scene
 from prsc.backends.store import AssetStore, relative_path
+from prsc.backends.uv_meshes import unit_uv_mesh
 from prsc.geometry.rotations import matrix_to_quat, rot_z
 
 GROUND_HALF_SIZE = 50.0
@@ -53,8 +54,8 @@ def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tupl
     layer is appended to `references`, authored once the stage is closed)."""
     from pxr import Gf, UsdGeom, UsdPhysics
 
-    if part.shape == "box" and part.texture is not None:
-        gprim = _unit_box_mesh(stage, path)  # a Cube has no UVs to show an image through
+    if part.texture is not None and part.shape != "mesh":
+        gprim = unit_uv_mesh(stage, path, part.shape)  # a Cube, Cylinder or Sphere has no UVs to show an image through
         scale = part.size
     elif part.shape == "box":
         gprim = UsdGeom.Cube.Define(stage, path)
@@ -94,30 +95,6 @@ def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tupl
         if isinstance(gprim, UsdGeom.Mesh):
             UsdPhysics.MeshCollisionAPI.Apply(gprim.GetPrim()).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
     return gprim
-
-
-_BOX_FACES = (  # each face of the unit box: its corners counter-clockwise seen from outside
-    ((1, -1, -1), (1, 1, -1), (1, 1, 1), (1, -1, 1)), ((-1, 1, -1), (-1, -1, -1), (-1, -1, 1), (-1, 1, 1)),
-    ((1, 1, -1), (-1, 1, -1), (-1, 1, 1), (1, 1, 1)), ((-1, -1, -1), (1, -1, -1), (1, -1, 1), (-1, -1, 1)),
-    ((-1, -1, 1), (1, -1, 1), (1, 1, 1), (-1, 1, 1)), ((-1, 1, -1), (1, 1, -1), (1, -1, -1), (-1, -1, -1)),
-)
-
-
-def _unit_box_mesh(stage, path: str):
-    """The unit box as a Mesh whose every face shows the whole image (`primvars:st` per face corner)."""
-    from pxr import Gf, Sdf, UsdGeom, Vt
-
-    mesh = UsdGeom.Mesh.Define(stage, path)
-    points = [Gf.Vec3f(*(0.5 * c for c in corner)) for face in _BOX_FACES for corner in face]
-    mesh.CreatePointsAttr(points)
-    mesh.CreateFaceVertexCountsAttr([4] * 6)
-    mesh.CreateFaceVertexIndicesAttr(list(range(24)))
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-    mesh.CreateExtentAttr([Gf.Vec3f(-0.5, -0.5, -0.5), Gf.Vec3f(0.5, 0.5, 0.5)])
-    st = Vt.Vec2fArray([Gf.Vec2f(u, v) for _ in range(6) for u, v in ((0, 0), (1, 0), (1, 1), (0, 1))])
-    UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray,
-                                            UsdGeom.Tokens.faceVarying).Set(st)
-    return mesh
 
 
 def _texture_material(stage, texture: str, folder: Path):

@@ -19,6 +19,7 @@ from typing import Sequence
 from prsc.errors import PrscError
 
 MESH_COLLISIONS = ("hull", "decomposed")
+TEXTURED_SHAPES = ("box", "cylinder", "sphere")  # the primitives `with texture` shows an image on
 """A mesh object's `collision`: its convex hull (every simulator's default), or the convex
 pieces of a CoACD decomposition (docs/backends.md, "Mesh collision")."""
 

@@ -32,7 +32,7 @@ PROPERTY_TYPES: dict[str, frozenset[Type]] = {
     "mesh": frozenset({Type.STRING}),
     "scale": frozenset({Type.SCALAR}),  # mesh file units -> metres, for sizes taken from the mesh
     "collision": frozenset({Type.STRING}),  # a mesh's collision geometry: "hull" or "decomposed"
-    "texture": frozenset({Type.STRING}),  # an image on every face of a box
+    "texture": frozenset({Type.STRING}),  # an image on a box, cylinder or sphere
     "upAxis": frozenset({Type.STRING}),  # the mesh file's axis that points up: "+z" (default), "+y", ...
     "model": frozenset({Type.STRING}),
     "tcp": frozenset({Type.STRING}),  # a robot's tool link, body or site (docs/assets.md)

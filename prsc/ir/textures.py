@@ -1,5 +1,5 @@
-"""`with texture "file.png"` (docs/language.md, "Meshes as you bring them"): an image on every
-face of a box, found like a mesh. Checked here, at the line that names it, so `prsc check`
+"""`with texture "file.png"` (docs/language.md, "Meshes as you bring them"): an image on a
+box's faces, wrapped round a cylinder or a sphere, found like a mesh. Checked here, at the line that names it, so `prsc check`
 reports a missing or unreadable image as `compile` would."""
 
 from __future__ import annotations
@@ -11,14 +11,14 @@ from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.mesh_sizes import constant_strings
 from prsc.ir.program import ObjectDecl, Program
-from prsc.mesh_paths import mesh_folders, read_image, resolve_mesh
+from prsc.mesh_paths import TEXTURED_SHAPES, mesh_folders, read_image, resolve_mesh
 
 
 def _checked(obj: ObjectDecl, texture: ir.Expr, folders: Sequence[str]) -> ObjectDecl:
     shape = obj.prop("shape")
-    if not (isinstance(shape, ir.Const) and str(shape.value).strip().lower() == "box"):
-        raise PrscError(f"{obj.name}: `texture` puts an image on a box's faces, and this object is no box "
-                        "(a mesh brings its own texture)", texture.span)
+    if not (isinstance(shape, ir.Const) and str(shape.value).strip().lower() in TEXTURED_SHAPES):
+        raise PrscError(f"{obj.name}: `texture` puts an image on a box, cylinder or sphere, and this object is none "
+                        "of them (a mesh brings its own texture)", texture.span)
     names = constant_strings(texture)
     if names is None:
         raise PrscError(f"{obj.name}: `texture` must be a file name, or a choice among file names", texture.span)
@@ -31,7 +31,7 @@ def _checked(obj: ObjectDecl, texture: ir.Expr, folders: Sequence[str]) -> Objec
 
 
 def with_textures(program: Program, include_dirs: Sequence[str] = ()) -> Program:
-    """The program, every `texture` checked: a box's, naming images that exist and read."""
+    """The program, every `texture` checked: on a box, cylinder or sphere, naming images that exist and read."""
     folders = mesh_folders(program.path, include_dirs)
     objects = tuple(o if o.prop("texture") is None else _checked(o, o.prop("texture"), folders) for o in program.objects)
     return replace(program, objects=objects)

@@ -269,8 +269,68 @@ def test_with_texture_puts_an_image_on_a_box_in_every_format(tmp_path):
     assert drawn == {"red.png", "green.png"}  # drawn per scene
 
 
+def _geom_pixels(model, data, geom: str) -> np.ndarray:
+    """The RGB pixels of one geom, seen from the front and above."""
+    import mujoco
+
+    renderer = mujoco.Renderer(model, 240, 320)
+    camera = mujoco.MjvCamera()
+    camera.lookat[:] = data.geom_xpos[model.geom(geom).id]
+    camera.distance, camera.azimuth, camera.elevation = 0.4, 90.0, -20.0
+    renderer.update_scene(data, camera)
+    image = renderer.render().copy()
+    renderer.enable_segmentation_rendering()
+    renderer.update_scene(data, camera)
+    ids = renderer.render()[..., 0]
+    renderer.close()
+    return image[ids == model.geom(geom).id].astype(float)
+
+
+def test_with_texture_wraps_an_image_round_a_cylinder_and_a_sphere(tmp_path):
+    import mujoco
+    from pxr import Usd, UsdGeom, UsdShade
+
+    _image(tmp_path / "red.png", (200, 0, 0))
+    (tmp_path / "round.prs").write_text(
+        'from tabletop import *\nt = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75\n'
+        'can = Cylinder completely on t, with width 0.08, with length 0.08, with height 0.12, with texture "red.png"\n'
+        'ball = Object completely on t, with shape "sphere", with width 0.1, with length 0.1, with height 0.1, '
+        'with texture "red.png"\n')
+    done = _prsc("compile", str(tmp_path / "round.prs"), "-n", "1", "--target", "json,mjcf,urdf,sdf,usd",
+                 "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    root = tmp_path / "out" / "round"
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    stage = Usd.Stage.Open(str(root / "usd" / "00000.usda"))
+    assert readback.usd_errors(root / "usd" / "00000.usda") == []
+    for geom, shape in (("can/cylinder", "cylinder"), ("ball/sphere", "sphere")):
+        assert model.geom(geom).type[0] == getattr(mujoco.mjtGeom, f"mjGEOM_{shape.upper()}")  # it still collides as itself
+        texture = model.mat_texid[int(model.geom(geom).matid[0]), mujoco.mjtTextureRole.mjTEXROLE_RGB]
+        assert model.tex_type[texture] == mujoco.mjtTexture.mjTEXTURE_CUBE
+        # Drawn: red with the image's white stripe (a white untextured geom shows no red at all).
+        pixels = _geom_pixels(model, data, geom)
+        assert len(pixels) > 1000 and np.mean(pixels[:, 0] - pixels[:, 1]) > 60
+        assert ((pixels.min(axis=1) > 150).sum()) > 20, geom
+        # USD: a mesh with one texture coordinate per face corner, bound to the image.
+        prim = stage.GetPrimAtPath(f"/World/{geom}")
+        assert prim.IsA(UsdGeom.Mesh), geom
+        mesh = UsdGeom.Mesh(prim)
+        st = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st").Get()
+        assert len(st) == len(mesh.GetFaceVertexIndicesAttr().Get()) == sum(mesh.GetFaceVertexCountsAttr().Get())
+        points = np.array(mesh.GetPointsAttr().Get())
+        radius = np.linalg.norm(points[:, :2], axis=1) if shape == "cylinder" else np.linalg.norm(points, axis=1)
+        assert np.allclose(radius[radius > 0.25], 0.5, atol=1e-6) and np.abs(points).max() <= 0.5 + 1e-6
+        material, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+        image = material.ComputeSurfaceSource()[0].GetInput("diffuseColor").GetConnectedSources()[0][0].source
+        assert Path(UsdShade.Shader(image.GetPrim()).GetInput("file").Get().resolvedPath).name.startswith("red-")
+        assert "textures/red-" in (root / "urdf" / "00000" / f"{geom.split('/')[0]}.urdf").read_text()
+    assert (root / "sdf" / "00000.sdf").read_text().count("textures/red-") == 2
+
+
 @pytest.mark.parametrize("line, message", [
-    ('c = Object on t, with shape "cylinder", with texture "red.png"', "no box"),
+    ('c = Object on t, with shape "mesh", with texture "red.png"', "none of them"),
     ('c = Cube on t, with texture "blue.png"', "not found"),
     ('c = Cube on t, with texture "notes.png"', "cannot read image"),
 ])
