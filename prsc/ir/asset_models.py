@@ -11,6 +11,7 @@ from typing import Sequence
 
 from prsc.asset_files import ArticulatedAsset, describe_asset, names_asset_file, resolve_asset_file
 from prsc.asset_links import asset_link
+from prsc.asset_scale import scaled_asset_file
 from prsc.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
 from prsc.errors import PrscError
 from prsc.ir import model as ir
@@ -62,19 +63,29 @@ def _check_joint(obj: ObjectDecl, asset: ArticulatedAsset, joint: str, value: ir
                         + f" {unit} is outside its limits [{found.lower:g}, {found.upper:g}] {unit}", value.span)
 
 
+def _scale_of(obj: ObjectDecl, scale: ir.Expr | None) -> float:
+    """The constant `scale` of an asset from a file (1 without one); an error at the value otherwise."""
+    if scale is None:
+        return 1.0
+    if not (isinstance(scale, ir.Const) and isinstance(scale.value, (int, float)) and not isinstance(scale.value, bool)
+            and scale.value > 0):
+        raise PrscError(f"{obj.name}: the `scale` of a URDF or MJCF asset must be a positive number, the same in every "
+                        f"scene (it scales the file once), not {format_expr(scale)}", scale.span)
+    return float(scale.value)
+
+
 def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: dict[str, ClassDef]) -> ObjectDecl:
     """`obj` with the file's box, its base and its joints checked."""
+    props = dict(obj.properties)
+    factor = _scale_of(obj, props.get("scale"))
     try:
-        path = resolve_asset_file(str(model.value), folders)
+        # At a scale other than 1 the file is a scaled copy in the build folder (prsc/asset_scale.py).
+        path = scaled_asset_file(resolve_asset_file(str(model.value), folders), factor, folders)
         asset = describe_asset(path, folders)
     except PrscError as error:
         raise PrscError(f"{obj.name}: {error.message}", model.span) from None
-    props = dict(obj.properties)
     # Found once, here: every later stage and the backends read the file this names.
     props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
-    if props.get("scale") is not None:
-        raise PrscError(f"{obj.name}: `scale` is not supported for a URDF or MJCF asset; it keeps the file's size",
-                        props["scale"].span)
     model_class = _declared_in(classes, obj.class_name, "model", model.span)
     for size, extent in zip(SIZES, asset.size):
         written = props.get(size)
