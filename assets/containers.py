@@ -11,6 +11,8 @@ from the asset's own (prsc.geometry.container.ASSET_INTERIORS), which the sample
 
 from __future__ import annotations
 
+import functools
+
 from prsc.assets.parts import Part, box
 from prsc.assets.vessel import vessel_parts
 from prsc.geometry.container import Interior
@@ -31,6 +33,7 @@ def open_box_parts(interior: Interior) -> tuple[Part, ...]:
     )
 
 
+@functools.lru_cache(maxsize=256)  # a pure function of the frozen interior: built once per box
 def container_parts(interior: Interior) -> tuple[Part, ...]:
     """The solids of a container with this interior (box or round)."""
     return vessel_parts(interior) if interior.shape == "round" else open_box_parts(interior)

@@ -8,6 +8,7 @@ original ProbRobScene `model_name "DiningChair"` finds `diningchair` (alias `cha
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Callable
 
@@ -27,7 +28,9 @@ def _container_recipe(model: str) -> Recipe:
     return lambda dimensions: container_parts(asset_interior(model, dimensions))
 
 
-PART_ASSETS: dict[str, Recipe] = {
+# Each recipe is a pure function of the box, and a dataset asks it for the same few boxes in
+# every scene: the parts are built once per box (frozen tuples, shared by every scene).
+PART_ASSETS: dict[str, Recipe] = {model: functools.lru_cache(maxsize=256)(recipe) for model, recipe in {
     **{model: _container_recipe(model) for model in ASSET_INTERIORS},
     "table": table_parts,
     "shelf": shelf_parts,
@@ -37,13 +40,14 @@ PART_ASSETS: dict[str, Recipe] = {
     "diningchair": chair_parts,
     "chair": chair_parts,
     "camera": camera_parts,
-}
+}.items()}
 """Rigid assets built from primitives, by normalised model name."""
 
 ROBOT_ASSETS: tuple[str, ...] = ("panda",)
 """Articulated robot models the backends know how to mount."""
 
 
+@functools.lru_cache(maxsize=1024)
 def normalise_model(name: str) -> str:
     """Lower case without separators: 'DiningChair', 'dining_chair' -> 'diningchair'."""
     return re.sub(r"[^a-z0-9]", "", name.lower())

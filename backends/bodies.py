@@ -12,6 +12,7 @@ from prsc.assets.containers import container_parts
 from prsc.assets.parts import Part, box, cylinder, sphere
 from prsc.assets.articulated import RobotModel, robot_model
 from prsc.assets.registry import part_recipe
+from prsc.asset_files import names_asset_file
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore, texture_of
@@ -137,7 +138,8 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
     try:
         # A file asset is a robot when the scene gives it a `tcp` (every Robot subclass does).
-        robot = robot_model(obj.model, mesh_folders(scene.spec, store.mesh_dirs), passive="tcp" not in obj.properties)
+        folders = mesh_folders(scene.spec, store.mesh_dirs) if obj.model is not None and names_asset_file(obj.model) else ()
+        robot = robot_model(obj.model, folders, passive="tcp" not in obj.properties)
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
     if robot is not None and obj.camera is None:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 from prsc.backends.names import element_names
@@ -60,14 +60,17 @@ def _fail(where: str, message: str) -> PrscError:
 
 def _floats(value: Any, count: int, where: str) -> tuple[float, ...]:
     """A list of `count` finite numbers."""
+    # The common case first (every scene the sampler writes): exact ints and floats only.
+    if type(value) in (list, tuple) and len(value) == count and all(type(item) in (float, int) for item in value):
+        out = tuple(map(float, value))
+        if all(map(math.isfinite, out)):
+            return out
     if not isinstance(value, (list, tuple)) or len(value) != count:
         raise _fail(where, f"expected a list of {count} numbers, got {value!r}")
-    out = []
     for item in value:
         if isinstance(item, bool) or not isinstance(item, (int, float)) or not math.isfinite(item):
             raise _fail(where, f"expected finite numbers, got {value!r}")
-        out.append(float(item))
-    return tuple(out)
+    return tuple(float(item) for item in value)
 
 
 def unit_quaternion(value: Any, where: str) -> tuple[float, float, float, float]:
@@ -112,9 +115,10 @@ def _camera(value: Any, where: str) -> CameraSpec | None:
     return CameraSpec(fovy=fovy, width=int(res[0]), height=int(res[1]))
 
 
-def _object(raw: Any, k: int) -> SceneObject:
+def _object(raw: Any, k: int) -> dict[str, Any]:
+    """The fields of one scene object (SceneObject's, but its element name), validated."""
     where = f"objects[{k}]"
-    if not isinstance(raw, Mapping):
+    if not isinstance(raw, (dict, Mapping)):
         raise _fail(where, "expected an object")
     name = raw.get("name")
     if not isinstance(name, str) or not name or "/" in name or not name.isprintable():
@@ -141,7 +145,7 @@ def _object(raw: Any, k: int) -> SceneObject:
     if shape not in SHAPES:
         raise _fail(f"{where}.shape", f"expected one of {', '.join(SHAPES)}, got {shape!r}")
     properties = raw.get("properties") or {}
-    if not isinstance(properties, Mapping):
+    if not isinstance(properties, (dict, Mapping)):
         raise _fail(f"{where}.properties", "expected an object")
     if shape == "mesh" and not isinstance(properties.get("mesh"), str):
         raise _fail(f"{where}.properties.mesh", "a mesh-shaped object needs a mesh file path")
@@ -152,16 +156,16 @@ def _object(raw: Any, k: int) -> SceneObject:
     if not static and camera is None and mass == 0.0:
         raise _fail(f"{where}.mass", "a free body needs a positive mass")
     joints = raw.get("joints") or {}
-    if not isinstance(joints, Mapping) or not all(isinstance(k, str) for k in joints):
+    if not isinstance(joints, (dict, Mapping)) or not all(isinstance(k, str) for k in joints):
         raise _fail(f"{where}.joints", "expected an object of joint name -> value")
     joints = {k: _floats([v], 1, f"{where}.joints.{k}")[0] for k, v in joints.items()}
     cls = raw.get("class", "Object")
-    return SceneObject(
-        name=name,
+    return dict(
+        label=name,
         cls=str(cls),
         position=scene_position(raw.get("position"), f"{where}.position"),
-        quaternion=quat,  # type: ignore[arg-type]
-        dimensions=dims,  # type: ignore[arg-type]
+        quaternion=quat,
+        dimensions=dims,
         static=static,
         mass=mass,
         color=_color(raw.get("color", [0.7, 0.7, 0.7, 1.0]), f"{where}.color"),
@@ -182,14 +186,14 @@ def parse_scene(raw: Mapping[str, Any]) -> Scene:
     objects = raw.get("objects")
     if not isinstance(objects, list):
         raise _fail("objects", "expected a list")
-    parsed = tuple(_object(o, k) for k, o in enumerate(objects))
+    fields = [_object(o, k) for k, o in enumerate(objects)]
     seen: set[str] = set()
-    for obj in parsed:
-        if obj.name in seen:
-            raise _fail(f"object {obj.name!r}", "duplicate object name")
-        seen.add(obj.name)
-    elements = element_names([obj.name for obj in parsed])
-    parsed = tuple(replace(obj, name=element, label=obj.name) for obj, element in zip(parsed, elements))
+    for found in fields:
+        if found["label"] in seen:
+            raise _fail(f"object {found['label']!r}", "duplicate object name")
+        seen.add(found["label"])
+    elements = element_names([found["label"] for found in fields])
+    parsed = tuple(SceneObject(name=element, **found) for found, element in zip(fields, elements))
     params = raw.get("params") or {}
     if not isinstance(params, Mapping):
         raise _fail("params", f"expected an object, got {params!r}")

@@ -165,7 +165,7 @@ def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, 
                                                         proposal=proposal_from_json(settings.proposal))
         law = compiled.law
         program = compiled.program
-        sampler = functools.partial(compiled.scene, seed)
+        sampler = compiled.drawer(seed)  # the next 64 scenes at once when the spec is batched
         data = read_input(path)
         sources = hashlib.sha256(data)
         sources.update(f"law={law}".encode())  # another law gives other scenes
