@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Any, Sequence
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from prsc.constraints.values import LinkValue, ObjectValue, RegionValue, as_position
 from prsc.errors import PrscError, Span
@@ -111,6 +110,8 @@ def polygon(vertices: Any, span: Span | None) -> RegionValue:
     u = vt[0]
     v = np.cross(normal, u)
     flat = np.stack([(pts - centre) @ u, (pts - centre) @ v], axis=1)
+    from scipy.spatial import ConvexHull  # here, not at the top: 0.2 s of every CLI start-up
+
     hull = ConvexHull(flat)
     # hull.equations rows: [a_u, a_v, c] with a . y + c <= 0 inside.
     a2 = hull.equations[:, :2]
@@ -124,6 +125,8 @@ def polygon(vertices: Any, span: Span | None) -> RegionValue:
 def polyhedron(vertices: Any, span: Span | None) -> RegionValue:
     """`ConvexPolyhedron([v1, ...])`: the convex hull of the vertices."""
     pts = _points(vertices, "ConvexPolyhedron", span)
+    from scipy.spatial import ConvexHull, QhullError  # here, not at the top: 0.2 s of every CLI start-up
+
     try:
         hull = ConvexHull(pts)
     except (QhullError, ValueError) as error:

@@ -7,7 +7,7 @@ from pathlib import Path
 from tests.original import ORIGINAL, original_params
 
 REPO = Path(__file__).resolve().parents[2]
-SCENES_PER_SPEC = 10  # per spec and format; the relation checks cover 400 scenes a spec
+SCENES_PER_SPEC = 6  # per spec and format (10 until the suite passed 4 min); the relation checks cover 400 scenes a spec
 
 
 def all_specs() -> list[Path]:

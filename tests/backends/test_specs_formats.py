@@ -1,4 +1,4 @@
-"""10 scenes of every spec, compiled once to every format (one fixture per spec, shared):
+"""6 scenes of every spec, compiled once to every format (one fixture per spec, shared):
 
 - MJCF loads, settles without jumps, and keeps the poses; every `completely on` object is at
   rest by `prsc compile --settle-check`'s test;
