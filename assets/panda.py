@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import os
 import xml.etree.ElementTree as ET
 from pathlib import Path
 

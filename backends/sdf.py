@@ -34,7 +34,6 @@ from prsc.backends.scene import Scene
 from prsc.assets.articulated import RobotModel, check_robot_name, robot_tree
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
-from prsc.errors import PrscError
 from prsc.geometry.rotations import matrix_to_rpy, quat_to_rpy, rot_z
 
 SDF_VERSION = "1.9"

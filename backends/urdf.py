@@ -27,7 +27,6 @@ from prsc.backends.scene import Scene
 from prsc.assets.articulated import RobotModel, check_robot_name
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
-from prsc.errors import PrscError
 from prsc.geometry.rotations import quat_to_rpy
 
 GROUND_SIZE = 50.0  # metres: edge of the ground slab

@@ -18,7 +18,6 @@ scenes only with --force. Scenes come from prsc.commands.scene_sources.
 from __future__ import annotations
 
 import argparse
-import functools
 import hashlib
 import itertools
 import os

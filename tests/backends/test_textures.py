@@ -81,20 +81,24 @@ def test_mjcf_has_the_texture_and_the_mesh_its_uvs(compiled):
 
 def _duck_pixels(model, data, textured: bool) -> np.ndarray:
     """The RGB pixels of duck `d` seen from the front, with its texture on or off."""
+    return _geom_pixels(model if textured else _untextured(model), data, "d/mesh", 0.35, 0.0, -15.0)
+
+
+def _geom_pixels(model, data, geom: str, distance: float = 0.4, azimuth: float = 90.0, elevation: float = -20.0) -> np.ndarray:
+    """The RGB pixels of one geom, seen from `distance` at `azimuth` and `elevation` (degrees)."""
     import mujoco
 
-    model = model if textured else _untextured(model)
     renderer = mujoco.Renderer(model, 240, 320)
     camera = mujoco.MjvCamera()
-    camera.lookat[:] = data.xpos[model.body("d").id]
-    camera.distance, camera.azimuth, camera.elevation = 0.35, 0.0, -15.0
+    camera.lookat[:] = data.geom_xpos[model.geom(geom).id]
+    camera.distance, camera.azimuth, camera.elevation = distance, azimuth, elevation
     renderer.update_scene(data, camera)
     image = renderer.render().copy()
     renderer.enable_segmentation_rendering()
     renderer.update_scene(data, camera)
     ids = renderer.render()[..., 0]
     renderer.close()
-    return image[ids == model.geom("d/mesh").id].astype(float)
+    return image[ids == model.geom(geom).id].astype(float)
 
 
 def _untextured(model):
@@ -267,23 +271,6 @@ def test_with_texture_puts_an_image_on_a_box_in_every_format(tmp_path):
         assert f"textures/{chosen[:-4]}-" in (root / "sdf" / f"{k:05d}.sdf").read_text()  # the albedo map
         assert f"textures/{chosen[:-4]}-" in (root / "urdf" / f"{k:05d}" / "crate.urdf").read_text()
     assert drawn == {"red.png", "green.png"}  # drawn per scene
-
-
-def _geom_pixels(model, data, geom: str) -> np.ndarray:
-    """The RGB pixels of one geom, seen from the front and above."""
-    import mujoco
-
-    renderer = mujoco.Renderer(model, 240, 320)
-    camera = mujoco.MjvCamera()
-    camera.lookat[:] = data.geom_xpos[model.geom(geom).id]
-    camera.distance, camera.azimuth, camera.elevation = 0.4, 90.0, -20.0
-    renderer.update_scene(data, camera)
-    image = renderer.render().copy()
-    renderer.enable_segmentation_rendering()
-    renderer.update_scene(data, camera)
-    ids = renderer.render()[..., 0]
-    renderer.close()
-    return image[ids == model.geom(geom).id].astype(float)
 
 
 def test_with_texture_wraps_an_image_round_a_cylinder_and_a_sphere(tmp_path):
