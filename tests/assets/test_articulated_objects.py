@@ -1,4 +1,4 @@
-"""Articulated furniture (docs/assets.md, "Links"): the tests' own cabinet URDF with a drawer
+"""Articulated furniture (docs/assets.md, "Links"): the tests' own cabinet (URDF and MJCF) with a drawer
 pulled out to a sampled value, a cube `completely in` the drawer and one `completely on` the
 carcass. The drawer's value is the MJCF `home` key's, the cube rests on the drawer's floor
 inside its walls, and a gentle pull moves the drawer with the cube riding along; links
@@ -36,11 +36,12 @@ def _prsc(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "prsc.cli", *args], capture_output=True, text=True, timeout=600)
 
 
-@pytest.fixture(scope="module")
-def compiled(tmp_path_factory) -> Path:
+@pytest.fixture(scope="module", params=["cabinet.urdf", "cabinet.xml"])
+def compiled(request, tmp_path_factory) -> Path:
+    """The same cabinet as the tests' URDF and as their MJCF, compiled to every format."""
     folder = tmp_path_factory.mktemp("cabinet")
-    shutil.copy(DATA / "cabinet.urdf", folder / "cabinet.urdf")
-    (folder / "cab.prs").write_text(SPEC)
+    shutil.copy(DATA / request.param, folder / request.param)
+    (folder / "cab.prs").write_text(SPEC.replace("cabinet.urdf", request.param))
     done = _prsc("compile", str(folder / "cab.prs"), "-n", str(SCENES), "--target", "json,mjcf,urdf,sdf,usd",
                  "-o", str(folder / "out"))
     assert done.returncode == 0, done.stdout + done.stderr
