@@ -67,15 +67,19 @@ class ArmFrames:
 
 
 def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
-                   iterations: int = 80) -> tuple[np.ndarray, bool]:
-    """(arm joint values, reached) for the tool at world point `goal` pointing down, from `q`.
+                   iterations: int = 80, facing: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, bool]:
+    """(arm joint values, reached) for the tool at world point `goal` pointing down, from `q`;
+    `facing` (a horizontal vector in the tool's frame, a horizontal world direction) fixes the
+    yaw too: the tool's vector then points along the direction (a gripper's closing axis
+    across a box's faces).
 
     Writes `data.qpos` of the arm's joints as it goes (other joints stay); call it on a
     scratch MjData."""
     import mujoco
 
     jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
-    horizontal = np.eye(3) - np.outer(DOWN, DOWN)  # turning about the vertical keeps a top-down pose
+    # Turning about the vertical keeps a top-down pose, so without `facing` that turn is free.
+    horizontal = np.eye(3) - np.outer(DOWN, DOWN) if facing is None else np.eye(3)
     q = np.clip(np.array(q, float), arm.lower, arm.upper)
     best, since_best = math.inf, 0
     for _ in range(iterations):
@@ -86,6 +90,13 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
         error_p = goal - position
         axis = rotation[:, 2]
         miss, tilt = float(np.linalg.norm(error_p)), math.acos(min(1.0, max(-1.0, -axis[2])))
+        turn = np.cross(axis, DOWN)
+        if facing is not None:
+            # The rotation from the tool's frame to the wanted one, from all three axes (half the
+            # sum of their cross products): the two given ones alone count a tilt twice.
+            pointing = rotation @ facing[0]
+            turn = 0.5 * (turn + np.cross(pointing, facing[1]) + np.cross(np.cross(axis, pointing), np.cross(DOWN, facing[1])))
+            tilt += math.acos(min(1.0, max(-1.0, float(pointing @ facing[1]))))
         if miss < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE:
             return q, True
         if miss + tilt < best * (1 - STALL_GAIN):
@@ -99,7 +110,7 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
         else:
             mujoco.mj_jacBody(model, data, jacp, jacr, arm.tool)
         jac = np.vstack([jacp[:, arm.dofs], horizontal @ jacr[:, arm.dofs]])
-        error = np.concatenate([error_p, horizontal @ np.cross(axis, DOWN)])
+        error = np.concatenate([error_p, horizontal @ turn])
         step = jac.T @ np.linalg.solve(jac @ jac.T + 1e-4 * np.eye(6), error)
         q = np.clip(q + step, arm.lower, arm.upper)
     return q, False
