@@ -135,12 +135,14 @@ def _collision_hull(link: ET.Element):
     """The convex hull (trimesh) of a link's collision meshes in the link frame, or None."""
     import trimesh
 
+    from prsc.mesh_paths import read_trimesh
+
     parts = []
     for collision in link.findall("collision"):
         mesh = collision.find("geometry/mesh")
         if mesh is None:
             continue
-        loaded = trimesh.load(mesh.get("filename"), force="mesh")
+        loaded = read_trimesh(mesh.get("filename"), force="mesh")
         origin = collision.find("origin")
         transform = np.eye(4)
         if origin is not None:
@@ -233,6 +235,8 @@ def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
     """
     import trimesh
 
+    from prsc.mesh_paths import read_trimesh
+
     mapping = {}
     for visual in tree.getroot().iter("visual"):
         mesh = visual.find("geometry/mesh")
@@ -243,7 +247,7 @@ def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
             continue  # visuals that reuse a collision mesh are clean already
         target = folder / "meshes" / f"{source.stem}.obj"
         target.parent.mkdir(parents=True, exist_ok=True)
-        loaded = trimesh.load(str(source), force="mesh", process=False)
+        loaded = read_trimesh(str(source), force="mesh", process=False)
         text = trimesh.exchange.obj.export_obj(
             loaded, include_normals=False, include_color=False, include_texture=False, write_texture=False
         )

@@ -104,10 +104,10 @@ def set_pose(xformable, matrix: np.ndarray) -> None:
 
 def _mesh_prim(stage, path: str, filename: str, origin: np.ndarray, scale, rgba=None):
     """A UsdGeom.Mesh converted from a mesh file with trimesh."""
-    import trimesh
+    from prsc.mesh_paths import read_trimesh
     from pxr import Gf, UsdGeom, Vt
 
-    mesh = trimesh.load(filename, force="mesh")
+    mesh = read_trimesh(filename, force="mesh")
     prim = UsdGeom.Mesh.Define(stage, path)
     vertices = np.asarray(mesh.vertices, dtype=np.float32)
     prim.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(vertices))

@@ -37,7 +37,9 @@ def mesh_properties(path: str) -> MeshProperties:
     """Mass properties of a normalised mesh file; its convex hull when it is not a solid."""
     import trimesh
 
-    loaded = trimesh.load(path, force="mesh")
+    from prsc.mesh_paths import read_trimesh
+
+    loaded = read_trimesh(path, force="mesh")
     # Geometry only: a textured mesh repeats vertices along its UV seams, merged here into one solid.
     mesh = trimesh.Trimesh(loaded.vertices, loaded.faces)
     if not mesh.is_volume:

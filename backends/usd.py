@@ -134,12 +134,12 @@ def _mesh_usd(obj_path: str) -> Path:
 
     target = Path(obj_path).with_suffix(".usda")
     if not target.is_file():
-        import trimesh
+        from prsc.mesh_paths import read_trimesh
         from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
         textured = texture_of(obj_path) is not None
         # A textured OBJ has one UV per vertex as written: read it back in that order.
-        mesh = trimesh.load(obj_path, force="mesh", process=not textured, maintain_order=textured)
+        mesh = read_trimesh(obj_path, force="mesh", process=not textured, maintain_order=textured)
         layer = Sdf.Layer.CreateAnonymous(".usda")
         stage = Usd.Stage.Open(layer)
         UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)

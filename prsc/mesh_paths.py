@@ -165,6 +165,19 @@ def base_color_image(mesh):
     return getattr(material, "image", None) or getattr(material, "baseColorTexture", None)
 
 
+def read_trimesh(path: Path | str, **options):
+    """`trimesh.load(path, **options)` without trimesh's numpy warnings on OBJ faces that lack UVs."""
+    import warnings
+
+    import trimesh
+
+    with warnings.catch_warnings():
+        # trimesh takes a median over the faces' texture coordinates, which is all NaN where
+        # an OBJ's faces have none (pybullet's Franka meshes): numpy warns, the mesh is right.
+        warnings.filterwarnings("ignore", category=RuntimeWarning, module=r"trimesh\.")
+        return trimesh.load(path, **options)
+
+
 def load_mesh(path: Path | str, up_axis: str = "+z"):
     """The triangles of a mesh file, turned so `up_axis` points up, as a trimesh.Trimesh (with
     its UVs and material when textured), or a PrscError saying why not."""
@@ -172,7 +185,7 @@ def load_mesh(path: Path | str, up_axis: str = "+z"):
 
     rotation = up_rotation(up_axis)
     try:
-        mesh = trimesh.load(path, force="mesh")
+        mesh = read_trimesh(path, force="mesh")
     except Exception:  # trimesh raises many types for unreadable files
         # Its message may quote the file (a token of a text file): say only what failed.
         raise PrscError(f"cannot read mesh {path}: not a mesh file trimesh can load "
@@ -213,7 +226,7 @@ def one_object_obj(path: str | Path, cache: Path) -> str:
     target = cache / hashlib.sha256(source.read_bytes()).hexdigest()[:16] / source.name
     if not target.is_file():
         # As written (no merging), so each vertex keeps its own texture coordinate.
-        loaded = trimesh.load(source, force="mesh", process=False, maintain_order=True)
+        loaded = read_trimesh(source, force="mesh", process=False, maintain_order=True)
         comments = (f"prsc: {source.name} as one object",)
         uv = getattr(loaded.visual, "uv", None)
         if uv is not None and len(uv) == len(loaded.vertices):  # textured: keep its UVs (MuJoCo reads `vt`)
