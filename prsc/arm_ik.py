@@ -126,6 +126,15 @@ def turned(home: np.ndarray, arm: ArmFrames, heading: float, azimuth: float) -> 
     return q
 
 
+def random_starts(arm: ArmFrames, home: np.ndarray, count: int) -> list[np.ndarray]:
+    """`count` joint vectors drawn within the limits (within pi of home where a joint has none), the same every call."""
+    if not count:
+        return []
+    lower = np.where(np.isfinite(arm.lower), arm.lower, home - math.pi)
+    upper = np.where(np.isfinite(arm.upper), arm.upper, home + math.pi)
+    return list(np.random.default_rng(0).uniform(lower, upper, (count, len(home))))
+
+
 def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarray, home: np.ndarray,
                    approach: float, restarts: int = 0) -> tuple[np.ndarray, bool]:
     """The point `approach` above `goal`, then `goal` itself, each top-down; from `seed`,
@@ -134,10 +143,7 @@ def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarr
     above = goal + np.array([0.0, 0.0, approach])
     bend = np.where(np.arange(len(home)) % 2, 0.5, -0.5)
     starts = [seed, home, home + bend, home - bend] if not np.array_equal(seed, home) else [home, home + bend, home - bend]
-    if restarts:
-        lower = np.where(np.isfinite(arm.lower), arm.lower, home - math.pi)
-        upper = np.where(np.isfinite(arm.upper), arm.upper, home + math.pi)
-        starts += list(np.random.default_rng(0).uniform(lower, upper, (restarts, len(home))))
+    starts += random_starts(arm, home, restarts)
     for start in starts:
         q, ok = solve_top_down(model, data, arm, above, start)
         if ok:

@@ -22,7 +22,7 @@ import math
 import mujoco
 import numpy as np
 
-from prsc.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, solve_top_down, turned
+from prsc.arm_ik import REACH_APPROACH, ArmFrames, random_starts, reach_top_down, solve_top_down, turned
 from prsc.backends.runner.arm_scene import TOLERANCE, SceneArm, ramp, scene_cubes, scene_robot, servos, settle
 from prsc.backends.runner.gripper import Gripper, gripper_of
 from prsc.errors import PrscError
@@ -30,6 +30,8 @@ from prsc.errors import PrscError
 LIFT = REACH_APPROACH  # m: the cube goes up to the point `reachable by` certifies above it
 LIFTED = 0.5 * LIFT  # m the cube must rise with the gripper to count as lifted
 GRIP_TIME = 1.0  # simulated s for the fingers to open or close
+GRASP_RESTARTS = 16  # starts drawn within the joint limits where home turned towards a cube fails:
+# with prsc.arm_ik.RESTARTS (4), 4 of 20 Franka episodes found no grasp of a cube 0.43-0.48 m away
 DESCENT_STEP = 0.03  # m between the waypoints down onto a cube: a servo's path between two
 # poses is a line in joint space, which near the edge of the reach swings the fingers into the cube
 
@@ -75,6 +77,9 @@ class Pick:
             _follow(model, data, arm, drive, down)
             _grip(model, data, gripper, gripper.opened)
             _follow(model, data, arm, drive, up)
+            # Back to the pose the episode started in: a joint-space line from one cube's pose
+            # to the next can sweep the arm through the table (a Franka stuck 84 cm short).
+            ramp(model, data, drive, home)
         return {"outcome": "picked", "reason": "", "lift": rise}
 
     @staticmethod
@@ -99,14 +104,25 @@ def _heights(centre: np.ndarray) -> list[np.ndarray]:
 def _grasp_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper, centre: np.ndarray,
                 rotation: np.ndarray, towards: np.ndarray) -> list[np.ndarray] | None:
     """The joints at each of `_heights(centre)` with the closing axis across two of the cube's
-    faces, each solved from the one below it (so the servos follow a straight line), or None."""
-    q, ok = reach_top_down(model, scratch, arm, centre, towards, towards, LIFT, restarts=RESTARTS)
-    if not ok:
-        return None
+    faces, each solved from the one below it (so the servos follow a straight line), or None.
+    Sought from home turned towards the cube, then from GRASP_RESTARTS starts within the limits."""
+    for start in [towards, *random_starts(arm, towards, GRASP_RESTARTS)]:
+        q, ok = reach_top_down(model, scratch, arm, centre, start, start, LIFT)
+        if ok:
+            plan = _facing_plan(model, scratch, arm, gripper, centre, rotation, q)
+            if plan is not None:
+                return plan
+    return None
+
+
+def _facing_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper, centre: np.ndarray,
+                 rotation: np.ndarray, q: np.ndarray) -> list[np.ndarray] | None:
+    """`_grasp_plan`'s waypoints from a top-down pose `q` at the cube (the tool at any yaw), or None."""
     # The four side faces' normals, nearest the closing axis as it stands first: the least turn
     # of the wrist (a gripper closes alike along a normal and its opposite, a wrist's limits do not).
-    _, tool_rotation = arm.tool_pose(scratch)
-    axis = tool_rotation @ gripper.closing
+    scratch.qpos[arm.qpos] = q
+    mujoco.mj_kinematics(model, scratch)
+    axis = arm.tool_pose(scratch)[1] @ gripper.closing
     normals = [sign * rotation[:, c] * np.array([1.0, 1.0, 0.0]) for c in (0, 1) for sign in (1.0, -1.0)]
     normals = sorted((n / np.linalg.norm(n) for n in normals if np.linalg.norm(n) > 1e-6), key=lambda n: -(n @ axis))
     for normal in normals:
