@@ -93,7 +93,7 @@ def _prsc(*args: str) -> subprocess.CompletedProcess:
 
 
 # The KUKA runs the same checks from test_user_arm_kuka.py: a file of its own, so that the
-# suite's two workers (--dist loadfile) share the arms' reach builds (15-33 s of CPU each).
+# suite's two workers (--dist loadfile) share the arms' reach builds (3-7 s of CPU each).
 HERE = ("lab_arm", "xarm6")
 
 

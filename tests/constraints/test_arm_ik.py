@@ -1,0 +1,67 @@
+"""prsc/arm_ik.py's own arithmetic: its 3-vector cross product is numpy's, bit for bit (the
+reach of every arm, cached by file content, must not change with it), and a `facing` solve
+turns the tool's given axis onto the world direction while it points down."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from prsc.arm_ik import ArmFrames, _cross, solve_top_down
+
+ARM = """\
+<mujoco>
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="base">
+      <joint name="yaw" axis="0 0 1" range="-3 3"/>
+      <geom type="cylinder" size="0.05 0.05" mass="1"/>
+      <body name="upper" pos="0 0 0.3">
+        <joint name="pitch" axis="0 1 0" range="-2 2"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
+        <body name="fore" pos="0.3 0 0">
+          <joint name="elbow" axis="0 1 0" range="-2.5 2.5"/>
+          <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.03" mass="1"/>
+          <body name="wrist" pos="0.25 0 0">
+            <joint name="bend" axis="0 1 0" range="-2.5 2.5"/>
+            <geom type="sphere" size="0.02" mass="0.2"/>
+            <body name="hand" pos="0.05 0 0">
+              <joint name="roll" axis="1 0 0" range="-3.14 3.14"/>
+              <geom type="box" size="0.02 0.02 0.02" mass="0.2"/>
+              <site name="tcp" pos="0.05 0 0" zaxis="1 0 0"/>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_the_cross_product_is_numpys_bit_for_bit():
+    rng = np.random.default_rng(3)
+    for a, b in zip(rng.normal(size=(2000, 3)) * rng.choice([1e-9, 1.0, 1e6], (2000, 1)), rng.normal(size=(2000, 3))):
+        assert np.array_equal(_cross(a, b), np.cross(a, b))
+
+
+def test_a_facing_solve_points_down_and_turns_the_given_axis_onto_the_direction():
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(ARM)
+    data = mujoco.MjData(model)
+    arm = ArmFrames.of(model, ["yaw", "pitch", "elbow", "bend", "roll"], "tcp")
+    start = np.array([0.0, 0.2, 0.8, 0.57, 0.0])
+    for yaw in np.linspace(-1.4, 1.4, 8):
+        # Either way along a direction (a gripper closes alike): the solve does not wrap a
+        # joint round, so one of the two may lie beyond the roll joint's limit from here.
+        for direction in (np.array([math.cos(yaw), math.sin(yaw), 0.0]), -np.array([math.cos(yaw), math.sin(yaw), 0.0])):
+            q, ok = solve_top_down(model, data, arm, np.array([0.35, 0.1, 0.1]), start,
+                                   facing=(np.array([1.0, 0.0, 0.0]), direction))
+            if ok:
+                break
+        assert ok, yaw
+        position, rotation = arm.tool_pose(data)
+        assert np.linalg.norm(position - [0.35, 0.1, 0.1]) < 0.002
+        assert rotation[2, 2] < -math.cos(0.02) and rotation[:, 0] @ direction > math.cos(0.02)
