@@ -22,7 +22,6 @@ class Gripper:
     actuators: np.ndarray  # actuator ids
     opened: np.ndarray  # control per actuator that opens the gripper
     closed: np.ndarray  # and that closes it
-    fingers: np.ndarray  # qpos addresses of the joints they move
     closing: np.ndarray  # horizontal unit vector in the tool's frame along which the fingers close
 
 
@@ -31,7 +30,7 @@ def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) ->
     chain = chain_joints(model, tool)
     scratch = mujoco.MjData(model)
     mujoco.mj_resetData(model, scratch)
-    actuators, opened, closed, fingers, moves = [], [], [], [], []
+    actuators, opened, closed, moves = [], [], [], []
     for a in range(model.nu):
         joints = _transmission(model, a)
         names = [model.joint(j).name for j, _ in joints]
@@ -45,7 +44,6 @@ def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) ->
         actuators.append(a)
         closed.append(float(ends[shut]))
         opened.append(float(ends[1 - shut]))
-        fingers += [int(model.jnt_qposadr[j]) for j, _ in joints]
         moves.append(spreads[1 - shut] - spreads[shut])
     if not actuators:
         return None
@@ -54,8 +52,7 @@ def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) ->
     if np.linalg.norm(main) < 1e-6:
         return None  # its joints move nothing across the tool's axis
     axis = main / np.linalg.norm(main)
-    return Gripper(np.array(actuators), np.array(opened), np.array(closed), np.array(sorted(set(fingers))),
-                   np.array([axis[0], axis[1], 0.0]))
+    return Gripper(np.array(actuators), np.array(opened), np.array(closed), np.array([axis[0], axis[1], 0.0]))
 
 
 def _transmission(model: mujoco.MjModel, a: int) -> list[tuple[int, float]]:
