@@ -32,15 +32,22 @@ from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "5"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "6"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
 STEP = 0.05  # m between radii of the coarse scan
 RADII = tuple(round(STEP * (i + 1), 3) for i in range(30))  # the coarse scan, m
 REFINE = 4  # bisections of each end (5 cm / 2^4 ~ 3 mm)
-MARGIN = 0.006  # m taken off the outer radii
-INNER_MARGIN = 0.01  # m added to the inner radii
+EDGE_REFINE = 4  # bisections of the angle where the reach ends between two rays (10 degrees / 2^4)
+EDGE_TOLERANCE = 0.01  # m an added ray's run may fall short of its reached neighbour's at either end
+# m taken off the outer radii and added to the inner ones. The chords under the outer radii
+# already lie inside them, and the hole's polygon holds the circle of each inner radius, so
+# the margins only cover the reach changing between two rays: on a 1 cm grid over the band
+# these give up against the 6 and 10 mm before them, every point is reached top-down (the
+# xArm6, the KUKA iiwa and the tests' MJCF arm, 2026-11-26; docs/assets.md).
+MARGIN = 0.003
+INNER_MARGIN = 0.005
 
 
 @dataclass(frozen=True)
@@ -154,17 +161,56 @@ def ray_angles() -> list[float]:
     return [-math.pi + 2 * math.pi * j / SECTORS for j in range(SECTORS)]
 
 
+def _rays_at(ik: TopDownIK, angle: float) -> list:
+    """The ray `angle` at every height (an (inner, outer) pair or None at each)."""
+    return [_ray(ik, angle, height) for height in HEIGHTS]
+
+
+def _edges(ik: TopDownIK, angles: list[float], per_ray: list[list]) -> dict[float, list]:
+    """Rays added where the reach ends between two rays (a base joint's limit): between a ray
+    reached at every height and a neighbour that is not, the angle is bisected EDGE_REFINE
+    times, keeping the last ray that reaches as far in and out as the reached one (within
+    EDGE_TOLERANCE) at every height: a sector keeps the smaller run of its two rays, and near
+    the limit a ray reaches only a sliver. Without them the gap would take both sectors about
+    a ray at the limit (40 degrees behind an arm whose base turns +-170)."""
+    n = len(angles)
+    full = [all(r is not None for r in rays) for rays in per_ray]
+    added: dict[float, list] = {}
+    for j in range(n):
+        following = (j + 1) % n
+        if full[j] == full[following]:
+            continue
+        end = angles[j] + (angles[following] - angles[j]) % (2 * math.pi)
+        inside, outside = (angles[j], end) if full[j] else (end, angles[j])
+        reached = per_ray[j] if full[j] else per_ray[following]
+        kept = None
+        for _ in range(EDGE_REFINE):
+            middle = (inside + outside) / 2
+            rays = _rays_at(ik, middle)
+            if all(r is not None and r[0] <= ref[0] + EDGE_TOLERANCE and r[1] >= ref[1] - EDGE_TOLERANCE
+                   for r, ref in zip(rays, reached)):
+                inside, kept = middle, rays
+            else:
+                outside = middle
+        if kept is not None:
+            added[(inside + math.pi) % (2 * math.pi) - math.pi] = kept
+    return added
+
+
 def compute_reach(asset: ArticulatedAsset) -> ArmReach:
     """The arm's top-down reach as a ring of exact rows (some seconds of IK)."""
     ik = TopDownIK(asset)
     angles = ray_angles()
-    rays = {(k, j): _ray(ik, angle, height) for k, height in enumerate(HEIGHTS) for j, angle in enumerate(angles)}
-    per_ray = [[rays[k, j] for k in range(len(HEIGHTS))] for j in range(SECTORS)]
+    per_ray = [_rays_at(ik, angle) for angle in angles]
+    by_angle = dict(zip(angles, per_ray)) | _edges(ik, angles, per_ray)
+    angles = sorted(by_angle)
+    per_ray = [by_angle[angle] for angle in angles]
     try:
-        ring = ring_from_rays(angles, list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)  # type: ignore[arg-type]
+        ring = ring_from_rays(angles, list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)
     except ValueError as error:
         raise ValueError(f"{error} (rays every {360 // SECTORS} degrees at heights {list(HEIGHTS)} m)") from None
-    table = tuple((HEIGHTS[k], angles[j], *(rays[k, j] or (None, None))) for k, j in sorted(rays))
+    table = tuple((height, angle, *(by_angle[angle][k] or (None, None)))
+                  for k, height in enumerate(HEIGHTS) for angle in angles)
     return ArmReach(ring, table)  # type: ignore[arg-type]
 
 

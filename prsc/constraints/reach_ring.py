@@ -47,8 +47,18 @@ def _left(angle: float) -> np.ndarray:
     return np.array([-math.sin(angle), math.cos(angle)])
 
 
-def _longest_run(reached: list[bool]) -> list[int]:
-    """The longest circular run of reached sectors, in order."""
+def _half_sectors(angles: list[float]) -> list[float]:
+    """Half the angle of each sector (ray j to ray j + 1, the last wrapping to the first): pi / n
+    for evenly spaced rays, so their rows are what they always were, bit for bit."""
+    n = len(angles)
+    widths = [(angles[(j + 1) % n] - angles[j]) % (2 * math.pi) for j in range(n)]
+    if max(abs(w - 2 * math.pi / n) for w in widths) < 1e-9:
+        return [math.pi / n] * n
+    return [w / 2 for w in widths]
+
+
+def _longest_run(reached: list[bool], halves: list[float]) -> list[int]:
+    """The circular run of reached sectors of the widest angle, in order."""
     n = len(reached)
     if all(reached):
         return list(range(n))
@@ -59,7 +69,7 @@ def _longest_run(reached: list[bool]) -> list[int]:
         j = (start + step) % n
         if reached[j]:
             run.append(j)
-            if len(run) > len(best):
+            if sum(halves[i] for i in run) > sum(halves[i] for i in best) + 1e-12:
                 best = list(run)
         else:
             run = []
@@ -79,8 +89,9 @@ def _extended(heights: list[float], radii: list[float], pad: float) -> list[tupl
 
 def ring_from_rays(angles: list[float], heights: list[float], rays: list[list[Ray]], margin: float,
                    inner_margin: float) -> ReachRing:
-    """The ring kept of rays at evenly spaced `angles` (radians, increasing, all the way round,
-    x ahead), measured at each of `heights` (rays[j][k]: ray j at height k, increasing).
+    """The ring kept of rays at `angles` (radians, increasing, all the way round, x ahead;
+    evenly spaced but for rays added where the reach ends, as arm_reach does), measured at
+    each of `heights` (rays[j][k]: ray j at height k, increasing).
 
     Sector j lies between rays j and j + 1 (the last wraps to the first) and is reached when
     both rays are at every height. Its outer radius at each height is the rays' smaller one
@@ -96,7 +107,7 @@ def ring_from_rays(angles: list[float], heights: list[float], rays: list[list[Ra
     from scipy.spatial import ConvexHull
 
     n = len(angles)
-    half = math.pi / n
+    halves = _half_sectors(angles)
     z0, z1 = heights[0], heights[-1]
     radii: list[tuple[list[float], list[float]] | None] = []
     for j in range(n):
@@ -109,12 +120,13 @@ def ring_from_rays(angles: list[float], heights: list[float], rays: list[list[Ra
         radii.append((inner, outer) if all(o > i for i, o in zip(inner, outer)) else None)
     if not any(radii):
         raise ValueError("the tool reaches no sector between two rays top-down")
-    run = _longest_run([r is not None for r in radii])
+    run = _longest_run([r is not None for r in radii], halves)
     far = max(max(radii[j][1]) for j in run)  # type: ignore[index]
     rows: list[list[float]] = []
     offsets: list[float] = []
     corners: list[list[float]] = [[0.0, 0.0, z0 - 0.01], [0.0, 0.0, z1 + 0.01]]
     for j in range(n):
+        half = halves[j]
         direction = _direction(angles[j] + half)
         if j not in run:
             rows.append([*direction, 0.0])
@@ -135,8 +147,8 @@ def ring_from_rays(angles: list[float], heights: list[float], rays: list[list[Ra
     hole = (equations[:, :3], -equations[:, 3])
     gap = hole
     if len(run) < n:
-        first, last = angles[run[0]], angles[run[-1]] + 2 * half
-        if len(run) * 2 * half <= math.pi + 1e-9:  # the run is convex: cut the outer cell to it
+        first, last = angles[run[0]], angles[run[-1]] + 2 * halves[run[-1]]
+        if sum(2 * halves[j] for j in run) <= math.pi + 1e-9:  # the run is convex: cut the outer cell to it
             rows += [[*-_left(first), 0.0], [*_left(last), 0.0]]
             offsets += [0.0, 0.0]
         else:  # the rest is a wedge of less than half a turn: anticlockwise of `last`, clockwise of `first`

@@ -15,6 +15,7 @@ and a small actuated MJCF arm written here, compiled through the CLI to every fo
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 import textwrap
@@ -198,12 +199,25 @@ def test_newton_loads_the_usd_with_every_joint_where_the_scene_starts_it(arm_out
         assert "table" in loaded["kinematic"] and {"c1", "c2", "c3"} <= loaded["free"]
 
 
-def _top_down_ik(model, data, tool, is_site: bool, qadr: np.ndarray, target: np.ndarray, start: np.ndarray):
-    """Joint values putting the tool at `target` with its +z down (scipy least squares)."""
+def _top_down_ik(model, data, tool, is_site: bool, qadr: np.ndarray, target: np.ndarray, start: np.ndarray,
+                 base: np.ndarray | None = None):
+    """Joint values putting the tool at `target` with its +z down (scipy least squares), from
+    `start`, from it bent either way and, given the arm's `base`, from it with the first
+    joint turned by the target's azimuth less the tool's at `start` (a local solve from home
+    does not swing the base round to a point behind the arm)."""
     import mujoco
     from scipy.optimize import least_squares
 
     lower, upper = model.jnt_range[qadr_joint(model, qadr)].T
+    seeds = [start, start + 0.4, start - 0.4]
+    if base is not None:
+        data.qpos[qadr] = start
+        mujoco.mj_kinematics(model, data)
+        tool_at = (data.site_xpos[tool] if is_site else data.xpos[tool]) - base
+        turn = math.atan2(*(target - base)[1::-1]) - math.atan2(*tool_at[1::-1])
+        turned = start.copy()
+        turned[0] += (turn + math.pi) % (2 * math.pi) - math.pi
+        seeds += [turned, turned + 0.4, turned - 0.4]
 
     def residual(q):
         data.qpos[qadr] = q
@@ -213,7 +227,7 @@ def _top_down_ik(model, data, tool, is_site: bool, qadr: np.ndarray, target: np.
         return np.concatenate([position - target, 0.2 * (rotation[:, 2] + np.array([0.0, 0.0, 1.0]))])
 
     best = None
-    for seed in (start, start + 0.4, start - 0.4):
+    for seed in seeds:
         fit = least_squares(residual, np.clip(seed, lower + 1e-6, upper - 1e-6), bounds=(lower, upper), xtol=1e-12,
                             ftol=1e-12, gtol=1e-12)
         if best is None or fit.cost < best.cost:
@@ -245,10 +259,11 @@ def _cubes_reached_top_down(root: Path, scenes: int, name: str) -> float:
         is_site = tcp in asset.sites
         tool = (model.site if is_site else model.body)(f"arm/{tcp}").id
         qadr = np.array([model.jnt_qposadr[model.joint(f"arm/{j.name}").id] for j in asset.joints])
+        mujoco.mj_kinematics(model, data)  # the base where the scene puts it (xpos is zero after a reset)
         base = data.body(f"arm/{asset.root}").xpos.copy()
         for cube in (o for o in scene["objects"] if o["name"].startswith("c")):
             target = np.array(cube["position"])
-            q = _top_down_ik(model, data, tool, is_site, qadr, target, np.array([j.home for j in asset.joints]))
+            q = _top_down_ik(model, data, tool, is_site, qadr, target, np.array([j.home for j in asset.joints]), base)
             data.qpos[qadr] = q
             mujoco.mj_kinematics(model, data)
             position = data.site_xpos[tool] if is_site else data.xpos[tool]

@@ -50,6 +50,32 @@ def test_a_ray_without_reach_makes_a_gap_and_only_there():
     assert _inside(ring, 0.25, math.radians(150))
 
 
+def test_rays_added_at_the_edge_narrow_the_gap_to_them():
+    """A base of +-170 degrees: the rays at +-170 and 180 reach nothing; rays added at
+    +-169 (as arm_reach adds them) keep the sectors up to them, and the gap is what is left."""
+    rays = {angle: [(0.2, 0.7)] * len(HEIGHTS) for angle in ANGLES}
+    for degrees in (-180, -170, 170):
+        rays[ANGLES[(degrees + 180) // 10]] = [None] * len(HEIGHTS)
+    without = ring_from_rays(ANGLES, HEIGHTS, list(rays.values()), 0.003, 0.005)
+    rays |= {math.radians(169): [(0.2, 0.7)] * len(HEIGHTS), math.radians(-169): [(0.2, 0.7)] * len(HEIGHTS)}
+    angles = sorted(rays)
+    ring = ring_from_rays(angles, HEIGHTS, [rays[a] for a in angles], 0.003, 0.005)
+    for degrees in (162, 168.5, -162, -168.5):
+        assert _inside(ring, 0.5, math.radians(degrees)) and not _inside(without, 0.5, math.radians(degrees))
+    for degrees in (169.5, 175, 180, -175, -169.5):
+        assert not _inside(ring, 0.5, math.radians(degrees)), degrees
+    assert _inside(ring, 0.6, math.radians(165)) and not _inside(ring, 0.699, math.radians(165))
+    assert _inside(ring, 0.21, math.radians(165)) and not _inside(ring, 0.2, math.radians(165))
+
+
+def test_evenly_spaced_rays_give_the_rows_they_always_did():
+    """The sectors' half angles are pi / n for evenly spaced rays, whatever the rounding of
+    the angles' differences: the Panda's ring and every cached ring stay the same to the bit."""
+    from prsc.constraints.reach_ring import _half_sectors
+
+    assert _half_sectors(ANGLES) == [math.pi / SECTORS] * SECTORS
+
+
 def test_reach_within_half_a_turn_is_cut_to_its_angles():
     rays = [[(0.2, 0.7)] * len(HEIGHTS) if abs(angle) <= math.radians(60) + 1e-9 else [None] * len(HEIGHTS)
             for angle in ANGLES]
