@@ -11,10 +11,12 @@ export PYOPENGL_PLATFORM ?= egl
 
 setup: $(STAMP)
 
+# --no-compile: pip byte-compiles every module it installs (23 of 53 s of a fresh install
+# here); Python compiles the ones a command imports on first use instead (about 5 s).
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q -e '.[dev,ray,gym]'
+	$(PY) -m pip install -q --no-compile -e '.[dev,ray,gym]'
 	touch $(STAMP)
 
 test: $(STAMP)
