@@ -6,7 +6,6 @@ that do not exist or are not hollow are errors `prsc check` reports at their lin
 
 from __future__ import annotations
 
-import json
 import shutil
 import subprocess
 import sys
@@ -48,21 +47,10 @@ def compiled(request, tmp_path_factory) -> Path:
     return folder / "out" / "cab"
 
 
-def _scene(root: Path, k: int):
-    import mujoco
-
-    scene = json.loads((root / "json" / f"{k:05d}.json").read_text())
-    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
-    return scene, model, data
-
-
 def test_the_home_key_holds_the_drawer_at_the_scene_value(compiled):
     values = []
     for k in range(SCENES):
-        scene, model, data = _scene(compiled, k)
+        scene, model, data = readback.scene_at_home(compiled, k)
         cab = next(o for o in scene["objects"] if o["name"] == "cab")
         value = cab["joints"]["drawer_slide"]
         assert 0.05 <= value <= 0.2
@@ -77,7 +65,7 @@ def test_the_cube_rests_on_the_drawer_floor_inside_its_walls(compiled):
     import mujoco
 
     for k in range(SCENES):
-        scene, model, data = _scene(compiled, k)
+        scene, model, data = readback.scene_at_home(compiled, k)
         cube = next(o for o in scene["objects"] if o["name"] == "cube")
         drawer = model.body("cab/drawer").id
         frame = data.xmat[drawer].reshape(3, 3)
@@ -98,7 +86,7 @@ def test_a_gentle_pull_moves_the_drawer_and_the_cube_rides_along(compiled):
     import mujoco
 
     for k in range(SCENES):
-        _, model, data = _scene(compiled, k)
+        _, model, data = readback.scene_at_home(compiled, k)
         joint = model.joint("cab/drawer_slide").qposadr[0]
         drawer, cube = model.body("cab/drawer").id, model.body("cube").id
         while data.time < 0.5:
@@ -123,7 +111,7 @@ def test_every_format_carries_the_cabinet(compiled):
         assert readback.usd_errors(compiled / "usd" / f"{k:05d}.usda") == []
         # USD: the drawer where the scene's joint value puts it (as in MuJoCo), drawn with the
         # URDF's boxes, its joint free (no drive holds furniture).
-        _, model, data = _scene(compiled, k)
+        _, model, data = readback.scene_at_home(compiled, k)
         stage = Usd.Stage.Open(str(compiled / "usd" / f"{k:05d}.usda"))
         drawer = next(p for p in stage.Traverse() if p.GetName() == "drawer")
         placed = UsdGeom.XformCache().GetLocalToWorldTransform(drawer).ExtractTranslation()
@@ -204,7 +192,7 @@ def test_the_library_cabinet_has_its_drawers_and_holds_a_cube_in_one(tmp_path):
     assert done.returncode == 0 and "3 of 3 scenes at rest" in done.stdout, done.stdout + done.stderr
     root = tmp_path / "out" / "lib"
     for k in range(3):
-        scene, model, data = _scene(root, k)
+        scene, model, data = readback.scene_at_home(root, k)
         cab = next(o for o in scene["objects"] if o["name"] == "cab")
         assert cab["dimensions"] == pytest.approx([0.8, 0.45, 0.75], abs=1e-9)  # the box the numbers ask for
         assert sorted(cab["joints"]) == [f"drawer{d}_slide" for d in range(4)]

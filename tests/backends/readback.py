@@ -38,6 +38,18 @@ def mjcf_model(path: Path):
     return mujoco.MjModel.from_xml_path(str(path))
 
 
+def scene_at_home(root: Path, k: int):
+    """(scene JSON, MjModel, MjData) of scene k of a compiled folder, at its `home` key."""
+    import mujoco
+
+    scene = json.loads((root / "json" / f"{k:05d}.json").read_text())
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    return scene, model, data
+
+
 def mjcf_poses(model, scene: dict) -> dict[str, tuple]:
     """World pose of every object body after mj_forward at the home keyframe."""
     import mujoco

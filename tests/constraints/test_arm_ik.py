@@ -10,34 +10,26 @@ import numpy as np
 
 from prsc.arm_ik import ArmFrames, _cross, solve_top_down
 
-ARM = """\
-<mujoco>
-  <compiler angle="radian"/>
-  <worldbody>
-    <body name="base">
-      <joint name="yaw" axis="0 0 1" range="-3 3"/>
-      <geom type="cylinder" size="0.05 0.05" mass="1"/>
-      <body name="upper" pos="0 0 0.3">
-        <joint name="pitch" axis="0 1 0" range="-2 2"/>
-        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03" mass="1"/>
-        <body name="fore" pos="0.3 0 0">
-          <joint name="elbow" axis="0 1 0" range="-2.5 2.5"/>
-          <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.03" mass="1"/>
-          <body name="wrist" pos="0.25 0 0">
-            <joint name="bend" axis="0 1 0" range="-2.5 2.5"/>
-            <geom type="sphere" size="0.02" mass="0.2"/>
-            <body name="hand" pos="0.05 0 0">
-              <joint name="roll" axis="1 0 0" range="-3.14 3.14"/>
-              <geom type="box" size="0.02 0.02 0.02" mass="0.2"/>
-              <site name="tcp" pos="0.05 0 0" zaxis="1 0 0"/>
-            </body>
-          </body>
-        </body>
-      </body>
-    </body>
-  </worldbody>
-</mujoco>
-"""
+
+def _arm():
+    """A five-joint arm (yaw, three pitches, a roll about the tool's axis), built with MjSpec."""
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    body = spec.worldbody.add_body(name="base")
+    links = [  # (name, joint axis, offset from the parent, capsule to the child)
+        ("base", (0, 0, 1), (0, 0, 0), (0, 0, 0.3)), ("upper", (0, 1, 0), (0, 0, 0.3), (0.3, 0, 0)),
+        ("fore", (0, 1, 0), (0.3, 0, 0), (0.25, 0, 0)), ("wrist", (0, 1, 0), (0.25, 0, 0), (0.05, 0, 0)),
+        ("hand", (1, 0, 0), (0.05, 0, 0), (0.03, 0, 0)),
+    ]
+    for k, (name, axis, offset, length) in enumerate(links):
+        if k:
+            body = body.add_body(name=name, pos=offset)
+        body.add_joint(name=f"joint{k}", axis=axis, range=(-3.14, 3.14) if k in (0, 4) else (-2.5, 2.5))
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=(0, 0, 0, *length), size=(0.02, 0, 0), mass=0.5)
+    body.add_site(name="tcp", pos=(0.05, 0, 0), zaxis=(1, 0, 0))
+    return spec.compile()
 
 
 def test_the_cross_product_is_numpys_bit_for_bit():
@@ -49,9 +41,9 @@ def test_the_cross_product_is_numpys_bit_for_bit():
 def test_a_facing_solve_points_down_and_turns_the_given_axis_onto_the_direction():
     import mujoco
 
-    model = mujoco.MjModel.from_xml_string(ARM)
+    model = _arm()
     data = mujoco.MjData(model)
-    arm = ArmFrames.of(model, ["yaw", "pitch", "elbow", "bend", "roll"], "tcp")
+    arm = ArmFrames.of(model, [f"joint{k}" for k in range(5)], "tcp")
     start = np.array([0.0, 0.2, 0.8, 0.57, 0.0])
     for yaw in np.linspace(-1.4, 1.4, 8):
         # Either way along a direction (a gripper closes alike): the solve does not wrap a

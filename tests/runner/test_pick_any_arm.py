@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.backends import readback
+
 pybullet_data = pytest.importorskip("pybullet_data")
 DATA = Path(pybullet_data.getDataPath())
 EPISODES = 2
@@ -64,17 +66,6 @@ def test_pick_lifts_every_cube_and_puts_it_back(name, tmp_path):
     assert min(r["lift"] for r in records) > 0.1
 
 
-def _episode(folder: Path, k: int = 0):
-    import mujoco
-
-    scene = json.loads((folder / "json" / f"{k:05d}.json").read_text())
-    model = mujoco.MjModel.from_xml_path(str(folder / "mjcf" / f"{k:05d}.xml"))
-    data = mujoco.MjData(model)
-    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
-    mujoco.mj_forward(model, data)
-    return scene, model, data
-
-
 def _compiled(tmp_path: Path, spec: Path, build: Path | None = None) -> Path:
     """Scene 0 of `spec` as JSON and MJCF; with `build`, in that build folder, so that the
     arm's meshes are read here, not found in a cache, and nothing is printed but prsc's own
@@ -99,7 +90,7 @@ def test_the_gripper_is_found_by_its_kinematics_and_the_cube_is_put_back(tmp_pat
     from prsc.backends.runner.pick import pick
 
     spec = _spec(tmp_path, ARMS["franka_urdf"], tcp=_tcp("franka_urdf"))
-    scene, model, data = _episode(_compiled(tmp_path, spec, build=tmp_path / "build"))
+    scene, model, data = readback.scene_at_home(_compiled(tmp_path, spec, build=tmp_path / "build"), 0)
     arm = SceneArm.of(scene, model, "pick")
     gripper = gripper_of(model, arm.prefix, arm.frames, arm.tool)
     assert [model.actuator(a).name for a in gripper.actuators] == ["arm/panda_finger_joint1", "arm/panda_finger_joint2"]
@@ -116,7 +107,8 @@ def test_the_gripper_is_found_by_its_kinematics_and_the_cube_is_put_back(tmp_pat
 def test_a_cube_wider_than_the_open_gripper_is_not_picked(tmp_path):
     from prsc.backends.runner.pick import pick
 
-    scene, model, data = _episode(_compiled(tmp_path, _spec(tmp_path, ARMS["franka_urdf"], "WideCube", _tcp("franka_urdf"))))
+    spec = _spec(tmp_path, ARMS["franka_urdf"], "WideCube", _tcp("franka_urdf"))
+    scene, model, data = readback.scene_at_home(_compiled(tmp_path, spec), 0)
     record = pick(scene, model, data)
     assert record["outcome"] in {"missed", "dropped"}, record
 
@@ -125,7 +117,7 @@ def test_an_arm_without_a_gripper_is_refused_by_name(tmp_path):
     from prsc.backends.runner.pick import pick
     from prsc.errors import PrscError
 
-    scene, model, data = _episode(_compiled(tmp_path, _spec(tmp_path, 'model: "xarm/xarm6_robot.urdf"')))
+    scene, model, data = readback.scene_at_home(_compiled(tmp_path, _spec(tmp_path, 'model: "xarm/xarm6_robot.urdf"')), 0)
     with pytest.raises(PrscError, match="arm has no gripper for pick: no actuator drives a joint off the chain"):
         pick(scene, model, data)
 
