@@ -48,7 +48,7 @@ class Pick:
         gripper = _gripper(scene_arm, model)
         drive = servos(model, arm)
         home = data.qpos[arm.qpos].copy()
-        root = data.xpos[model.body(scene_arm.prefix + scene_arm.asset.root).id]
+        root = data.xpos[model.body(scene_arm.prefix + scene_arm.asset.root).id].copy()
         heading = arm.heading(data, root)
         scratch = mujoco.MjData(model)
         _grip(model, data, gripper, gripper.opened)
