@@ -38,8 +38,8 @@ class SceneArm:
         robot, asset = scene_robot(scene, controller)
         prefix = f"{robot['body']}/"
         tool = prefix + str((robot.get("properties") or {}).get("tcp") or asset.tcp)  # the spec's `with tcp`, else the file's
-        chain = chain_joints(model, tool)
-        joints = [prefix + j.name for j in asset.joints if prefix + j.name in chain and prefix + j.name in driven_joints(model)]
+        moving = chain_joints(model, tool) & driven_joints(model)
+        joints = [prefix + j.name for j in asset.joints if prefix + j.name in moving]
         return SceneArm(robot, asset, prefix, ArmFrames.of(model, joints, tool), tool)
 
 
@@ -106,7 +106,7 @@ def settle(model: mujoco.MjModel, data: mujoco.MjData, arm: ArmFrames, goal: np.
 
 
 def ramp(model: mujoco.MjModel, data: mujoco.MjData, drive: np.ndarray, q: np.ndarray) -> None:
-    """Move the targets of servos `drive` from where the joints stand to `q` at JOINT_SPEED."""
+    """Move the targets of servos `drive` from their current values to `q` at JOINT_SPEED, stepping."""
     start = data.ctrl[drive].copy()
     duration = float(np.abs(q - start).max()) / JOINT_SPEED
     end = data.time + duration
