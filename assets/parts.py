@@ -26,6 +26,7 @@ class Part:
     mesh: str | None = None  # normalised mesh file (absolute path) for shape "mesh"
     visible: bool = True  # False: collision geometry only (a convex piece of a decomposed mesh)
     texture: str | None = None  # base-colour image (absolute path) of a textured mesh part, read through its UVs
+    maps: tuple[tuple[str, str], ...] = ()  # (role, absolute path) of its normal and ORM maps, beside `texture`
 
     @property
     def radius(self) -> float:

@@ -15,7 +15,7 @@ from prsc.assets.registry import part_recipe
 from prsc.asset_files import names_asset_file
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
-from prsc.backends.store import AssetStore, texture_of
+from prsc.backends.store import AssetStore, pbr_maps, texture_of
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior, declared_interior
 from prsc.mesh_paths import MESH_COLLISIONS, TEXTURED_SHAPES, mesh_folders, resolve_mesh
@@ -114,7 +114,8 @@ def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part
             raise PrscError(f"collision {obj.properties['collision']!r} is not one of {', '.join(MESH_COLLISIONS)}")
         mesh = store.normalised_mesh(source, str(obj.properties.get("upAxis", "+z")))
         texture = texture_of(mesh)
-        seen = Part("mesh", "mesh", obj.dimensions, mesh=str(mesh), texture=None if texture is None else str(texture))
+        image = None if texture is None else str(texture)
+        seen = Part("mesh", "mesh", obj.dimensions, mesh=str(mesh), texture=image, maps=pbr_maps(image))
         if collision == "hull":
             return (seen,)
         pieces = store.convex_pieces(mesh)

@@ -163,6 +163,13 @@ def _check_masses(scene: Scene, bodies: tuple[Body, ...]) -> None:
             )
 
 
+def _map_roles() -> dict:
+    """MuJoCo's material role of each PBR map a textured mesh part may carry."""
+    import mujoco
+
+    return {"normal": mujoco.mjtTextureRole.mjTEXROLE_NORMAL, "orm": mujoco.mjtTextureRole.mjTEXROLE_ORM}
+
+
 def _geom_rgba(obj, part) -> tuple[float, ...]:
     return TEXTURED_RGBA if part.texture is not None else tuple(obj.color)
 
@@ -188,6 +195,8 @@ def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dic
                 stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
             if part.texture is not None:
                 exact[("texture", gname)] = {"file": _attribute(relative_path(part.texture, folder))}
+            for role, image in part.maps:
+                exact[("texture", f"{gname}/{role}")] = {"file": _attribute(relative_path(image, folder))}
             exact[("geom", gname)] = stamp
         if body.camera is not None:
             exact[("camera", obj.name)] = {"quat": nums(CAMERA_QUAT_NEG_Z), "fovy": num(body.camera.fovy)}
@@ -256,6 +265,10 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
                                  colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)  # a PNG says its own
                 material = spec.add_material(name=gname)
                 material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = gname
+                for role, image in part.maps:  # data, not colour: read linearly
+                    spec.add_texture(name=f"{gname}/{role}", type=kind, file=image,
+                                     colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_LINEAR)
+                    material.textures[_map_roles()[role]] = f"{gname}/{role}"
                 kwargs["material"] = gname  # unmodulated: rgba white
             if not part.collides:
                 kwargs.update(contype=0, conaffinity=0)
@@ -348,7 +361,8 @@ def _topology(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder:
     """Everything of a scene's MJCF that `_stamps` does not hold: scenes alike in this share a template."""
     return (scene.ground, str(store.root), str(folder), tuple(
         (b.obj.name, b.fixed, b.robot, None if b.camera is None else (b.camera.width, b.camera.height),
-         tuple((p.name, p.shape, p.collides, p.visible, p.texture is not None) for p in b.parts),
+         tuple((p.name, p.shape, p.collides, p.visible, p.texture is not None, tuple(r for r, _ in p.maps))
+               for p in b.parts),
          tuple(sorted(b.obj.joints)) if b.robot is not None else ())
         for b in bodies))
 

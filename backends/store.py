@@ -89,10 +89,14 @@ class AssetStore:
         target = self.root / "meshes" / name
         if not target.is_file():
             target.parent.mkdir(parents=True, exist_ok=True)
-            obj, image = _normalise_mesh_obj(Path(source), up_axis, target.stem)
+            obj, image, maps = _normalise_mesh_obj(Path(source), up_axis, target.stem)
             if image is not None:  # the OBJ is the cache's marker, so it is written last
                 atomic_write(target.with_suffix(".png"), image)
-                atomic_write(target.with_suffix(".mtl"), f"newmtl texture\nKd 1 1 1\nmap_Kd {target.stem}.png\n")
+                mtl = f"newmtl texture\nKd 1 1 1\nmap_Kd {target.stem}.png\n"
+                for role, png in maps.items():
+                    atomic_write(_map_path(target, role), png)
+                mtl += "".join(_MTL_LINES[role].format(f"{target.stem}_{role}.png") for role in maps)
+                atomic_write(target.with_suffix(".mtl"), mtl)
             atomic_write(target, obj)
         return target
 
@@ -141,6 +145,26 @@ def _image_name(source: str, mtime_ns: int, size: int) -> str:
     return f"{Path(source).stem}-{_sha12(Path(source).read_bytes())}.png"
 
 
+# The OBJ/MTL PBR extension's names: a normal map, and roughness and metallic read from the
+# glTF image's G and B channels.
+_MTL_LINES = {"normal": "norm {0}\n", "orm": "map_Pr -imfchan g {0}\nmap_Pm -imfchan b {0}\n"}
+
+
+def _map_path(normalised: Path, role: str) -> Path:
+    return normalised.with_name(f"{normalised.stem}_{role}.png")
+
+
+def pbr_maps(texture: str | None) -> tuple[tuple[str, str], ...]:
+    """(role, path) of the PBR maps the store wrote beside a mesh's base-colour image, in
+    PBR_MAPS order (none for a `with texture` image or an untextured part)."""
+    from prsc.mesh_paths import PBR_MAPS
+
+    if texture is None:
+        return ()
+    base = Path(texture)
+    return tuple((role, str(_map_path(base, role))) for role in PBR_MAPS if _map_path(base, role).is_file())
+
+
 def texture_of(normalised: Path | str) -> Path | None:
     """The base-colour image the store wrote beside a normalised OBJ, if the mesh is textured."""
     image = Path(normalised).with_suffix(".png")
@@ -150,19 +174,20 @@ def texture_of(normalised: Path | str) -> Path | None:
 @lru_cache(maxsize=256)
 def _normalised_name(source: str, mtime_ns: int, size: int, up_axis: str) -> str:
     """`<stem>-<hash of the file's bytes and the up axis>.obj` (cached while the file is unchanged)."""
-    # v2: textured meshes keep their UVs and image
-    key = Path(source).read_bytes() + (b"" if up_axis == "+z" else f"\0up{up_axis}".encode()) + b"\0v2"
+    # v2: textured meshes keep their UVs and image; v3: and their normal and ORM maps
+    key = Path(source).read_bytes() + (b"" if up_axis == "+z" else f"\0up{up_axis}".encode()) + b"\0v3"
     return f"{Path(source).stem}-{_sha12(key)}.obj"
 
 
-def _normalise_mesh_obj(source: Path, up_axis: str, stem: str) -> tuple[bytes, bytes | None]:
+def _normalise_mesh_obj(source: Path, up_axis: str, stem: str) -> tuple[bytes, bytes | None, dict[str, bytes]]:
     """(OBJ text of a mesh turned upright, moved to its bounding-box centre and scaled per axis
-    to size 1; its base-colour image as PNG bytes, or None when it has none)."""
+    to size 1; its base-colour image as PNG bytes, or None when it has none; its PBR maps as
+    PNG bytes by role)."""
     import io
 
     import numpy as np
 
-    from prsc.mesh_paths import base_color_image
+    from prsc.mesh_paths import base_color_image, pbr_images
 
     mesh = load_mesh(source, up_axis)
     low, high = mesh.bounds
@@ -173,8 +198,13 @@ def _normalise_mesh_obj(source: Path, up_axis: str, stem: str) -> tuple[bytes, b
     comments = ("prsc: normalised to a unit cube centred at the origin", f"source: {source.name}")
     image = base_color_image(mesh)
     if image is None:
-        return obj_text(vertices, mesh.faces, comments).encode(), None
-    png = io.BytesIO()
-    image.save(png, format="PNG")
+        return obj_text(vertices, mesh.faces, comments).encode(), None, {}
+
+    def png(picture) -> bytes:
+        out = io.BytesIO()
+        picture.save(out, format="PNG")
+        return out.getvalue()
+
     uv = np.asarray(mesh.visual.uv, dtype=float)
-    return obj_text(vertices, mesh.faces, comments, uv=uv, material_file=f"{stem}.mtl").encode(), png.getvalue()
+    maps = {role: png(picture) for role, picture in pbr_images(mesh).items()}
+    return obj_text(vertices, mesh.faces, comments, uv=uv, material_file=f"{stem}.mtl").encode(), png(image), maps

@@ -87,7 +87,7 @@ def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tupl
     if part.texture is not None:
         from pxr import UsdShade
 
-        UsdShade.MaterialBindingAPI.Apply(gprim.GetPrim()).Bind(_texture_material(stage, part.texture, folder))
+        UsdShade.MaterialBindingAPI.Apply(gprim.GetPrim()).Bind(_texture_material(stage, part.texture, folder, part.maps))
     if not part.visible:
         gprim.CreatePurposeAttr(UsdGeom.Tokens.guide)  # collision only: renderers skip guides
     if part.collides:
@@ -97,10 +97,11 @@ def _part_prim(stage, path: str, part, folder: Path, rgba, references: list[tupl
     return gprim
 
 
-def _texture_material(stage, texture: str, folder: Path):
+def _texture_material(stage, texture: str, folder: Path, maps: tuple[tuple[str, str], ...] = ()):
     """The scene's UsdPreviewSurface material showing `texture` through the mesh's `st` primvar
-    (one per image, under /World/Looks; the image path is relative to the scene file)."""
-    from pxr import Sdf, Tf, UsdGeom, UsdShade
+    (one per image, under /World/Looks; the image path is relative to the scene file), with
+    the mesh's normal map and roughness and metallic from its ORM map when it has them."""
+    from pxr import Gf, Sdf, Tf, UsdGeom, UsdShade
 
     path = f"/World/Looks/{Tf.MakeValidIdentifier(Path(texture).stem)}"
     material = UsdShade.Material.Get(stage, path)
@@ -112,16 +113,34 @@ def _texture_material(stage, texture: str, folder: Path):
     reader.CreateIdAttr("UsdPrimvarReader_float2")
     reader.CreateInput("varname", Sdf.ValueTypeNames.String).Set("st")
     reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
-    image = UsdShade.Shader.Define(stage, f"{path}/image")
-    image.CreateIdAttr("UsdUVTexture")
-    image.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(relative_path(texture, folder)))
-    image.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set("sRGB")
-    image.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+
+    def image_reader(name: str, file: str, colour_space: str):
+        image = UsdShade.Shader.Define(stage, f"{path}/{name}")
+        image.CreateIdAttr("UsdUVTexture")
+        image.CreateInput("file", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(relative_path(file, folder)))
+        image.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(colour_space)
+        image.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.ConnectableAPI(), "result")
+        return image
+
+    image = image_reader("image", texture, "sRGB")
     image.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
     surface = UsdShade.Shader.Define(stage, f"{path}/surface")
     surface.CreateIdAttr("UsdPreviewSurface")
     surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(image.ConnectableAPI(), "rgb")
-    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.8)
+    found = dict(maps)
+    if "normal" in found:  # a tangent-space normal in [0, 1] per channel, read as [-1, 1]
+        normal = image_reader("normal", found["normal"], "raw")
+        normal.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(2.0, 2.0, 2.0, 1.0))
+        normal.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(-1.0, -1.0, -1.0, 0.0))
+        normal.CreateOutput("rgb", Sdf.ValueTypeNames.Float3)
+        surface.CreateInput("normal", Sdf.ValueTypeNames.Normal3f).ConnectToSource(normal.ConnectableAPI(), "rgb")
+    if "orm" in found:  # glTF's packing: roughness in G, metallic in B
+        orm = image_reader("orm", found["orm"], "raw")
+        for channel, name in (("g", "roughness"), ("b", "metallic")):
+            orm.CreateOutput(channel, Sdf.ValueTypeNames.Float)
+            surface.CreateInput(name, Sdf.ValueTypeNames.Float).ConnectToSource(orm.ConnectableAPI(), channel)
+    else:
+        surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(0.8)
     material.CreateSurfaceOutput().ConnectToSource(surface.ConnectableAPI(), "surface")
     return material
 

@@ -165,6 +165,20 @@ def base_color_image(mesh):
     return getattr(material, "image", None) or getattr(material, "baseColorTexture", None)
 
 
+PBR_MAPS = ("normal", "orm")  # the maps a textured mesh keeps beside its base colour, in this order
+
+
+def pbr_images(mesh) -> dict[str, object]:
+    """The normal map and the occlusion-roughness-metallic map (PIL images, by PBR_MAPS role)
+    of a textured glTF mesh, those it has. glTF packs roughness in G and metallic in B of one
+    image, the layout MuJoCo's `orm` role and UsdPreviewSurface's channels read."""
+    if base_color_image(mesh) is None:
+        return {}
+    material = mesh.visual.material
+    images = {"normal": getattr(material, "normalTexture", None), "orm": getattr(material, "metallicRoughnessTexture", None)}
+    return {role: image for role, image in images.items() if image is not None}
+
+
 def read_trimesh(path: Path | str, **options):
     """`trimesh.load(path, **options)` without trimesh's numpy warnings on OBJ faces that lack UVs."""
     import warnings

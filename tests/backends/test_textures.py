@@ -328,3 +328,77 @@ def test_check_reports_a_bad_texture_at_its_line(tmp_path, line, message):
     done = _prsc("check", str(tmp_path / "spec.prs"))
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert "spec.prs:3:" in done.stderr and message in done.stderr, done.stderr
+
+
+PBR_SPEC = """\
+from tabletop import *
+
+class Tile:
+    mesh: "tile.glb"
+    width: 0.1
+    length: 0.1
+    height: 0.05
+
+t = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75
+tile = Tile completely on t
+"""
+
+
+def test_a_glb_keeps_its_normal_and_roughness_metallic_maps(tmp_path):
+    """A glTF mesh with a normal map and glTF's metallic-roughness image (made here with
+    trimesh): MJCF's material reads them as its `normal` and `orm` layers (linear), USD's
+    UsdPreviewSurface as `normal` (scaled to [-1, 1]) and `roughness`/`metallic` (G and B),
+    and the store's MTL, which URDF and SDF meshes carry, names them; their pixels arrive."""
+    import mujoco
+    import trimesh
+    from PIL import Image
+    from pxr import Usd, UsdShade
+
+    box = trimesh.creation.box(extents=[1.0, 1.0, 0.5])
+    box.unmerge_vertices()
+    rng = np.random.default_rng(0)
+    images = {"base": Image.fromarray((rng.random((16, 16, 3)) * 255).astype(np.uint8)),
+              "normal": Image.fromarray(np.full((16, 16, 3), [128, 128, 255], np.uint8)),
+              "orm": Image.fromarray(np.full((16, 16, 3), [255, 200, 30], np.uint8))}
+    material = trimesh.visual.material.PBRMaterial(baseColorTexture=images["base"], normalTexture=images["normal"],
+                                                   metallicRoughnessTexture=images["orm"])
+    box.visual = trimesh.visual.TextureVisuals(uv=rng.random((len(box.vertices), 2)), material=material)
+    box.export(tmp_path / "tile.glb")
+    (tmp_path / "pbr.prs").write_text(PBR_SPEC)
+    done = _prsc("compile", str(tmp_path / "pbr.prs"), "-n", "1", "--target", "json,mjcf,urdf,usd",
+                 "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    root = tmp_path / "out" / "pbr"
+
+    model = _model(root)
+    matid = int(model.geom("tile/mesh").matid[0])
+    for role, colour in ((mujoco.mjtTextureRole.mjTEXROLE_NORMAL, [128, 128, 255]),
+                         (mujoco.mjtTextureRole.mjTEXROLE_ORM, [255, 200, 30])):
+        tex = model.mat_texid[matid, role]
+        assert tex >= 0
+        assert model.tex_colorspace[tex] == mujoco.mjtColorSpace.mjCOLORSPACE_LINEAR
+        start, size = model.tex_adr[tex], model.tex_width[tex] * model.tex_height[tex] * model.tex_nchannel[tex]
+        pixels = model.tex_data[start:start + size].reshape(-1, model.tex_nchannel[tex])[:, :3]
+        assert (pixels == colour).all()
+
+    usda = root / "usd" / "00000.usda"
+    assert readback.usd_errors(usda) == []
+    stage = Usd.Stage.Open(str(usda))
+    surface = next(UsdShade.Shader(p) for p in stage.Traverse()
+                   if p.IsA(UsdShade.Shader) and UsdShade.Shader(p).GetIdAttr().Get() == "UsdPreviewSurface")
+    sources = {}
+    for name in ("normal", "roughness", "metallic"):
+        (info,) = surface.GetInput(name).GetConnectedSources()[0]
+        sources[name] = (UsdShade.Shader(info.source.GetPrim()), info.sourceName)
+    assert sources["roughness"][1] == "g" and sources["metallic"][1] == "b"
+    normal, _ = sources["normal"]
+    assert tuple(normal.GetInput("scale").Get()) == (2.0, 2.0, 2.0, 1.0)
+    assert normal.GetInput("sourceColorSpace").Get() == "raw"
+    for shader, _ in sources.values():
+        image = (usda.parent / shader.GetInput("file").Get().path).resolve()
+        assert image.is_file()
+    assert np.array_equal(np.asarray(Image.open(usda.parent / normal.GetInput("file").Get().path))[..., :3],
+                          np.asarray(images["normal"]))
+
+    mtl = next((root / "assets" / "meshes").glob("tile-*.mtl")).read_text()
+    assert "norm tile-" in mtl and "map_Pr -imfchan g" in mtl and "map_Pm -imfchan b" in mtl
