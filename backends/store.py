@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.assets.articulated import RobotModel
-from prsc.files import atomic_copy, atomic_write
+from prsc.files import atomic_copy, atomic_write, is_temporary_name
 from prsc.errors import PrscError
 from prsc.mesh_paths import load_mesh, obj_text
 
@@ -28,14 +28,23 @@ def _sha12(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()[:12]
 
 
+def _files(folder: str) -> list[os.DirEntry]:
+    """The files of `folder` by name, without the temporaries of a write under way."""
+    return [e for e in sorted(os.scandir(folder), key=lambda e: e.name) if e.is_file() and not is_temporary_name(e.name)]
+
+
 @lru_cache(maxsize=64)
 def _folder_key(folder: str) -> str:
-    """`<folder name>-<hash of its files' names and contents>`: equal folders, equal keys."""
+    """`<folder name>-<hash of its files' names and contents>`: equal folders, equal keys.
+
+    Another process's half-written temporaries are not the folder's files: counted, they would
+    give a process that hashed the Panda's meshes while another was writing them a key of its
+    own for the whole session (the key is cached), so its scenes would name other mesh folders
+    than a fresh process's (the likely cause of one CI failure in test_ray, 2026-11-26)."""
     digest = hashlib.sha256()
-    for entry in sorted(os.scandir(folder), key=lambda e: e.name):
-        if entry.is_file():
-            digest.update(entry.name.encode() + b"\0")
-            digest.update(hashlib.sha256(Path(entry.path).read_bytes()).digest())
+    for entry in _files(folder):
+        digest.update(entry.name.encode() + b"\0")
+        digest.update(hashlib.sha256(Path(entry.path).read_bytes()).digest())
     return f"{Path(folder).name}-{digest.hexdigest()[:10]}"
 
 
@@ -58,9 +67,8 @@ class AssetStore:
         marker = target / ".complete"
         if not marker.is_file():
             target.mkdir(parents=True, exist_ok=True)
-            for entry in sorted(os.scandir(folder), key=lambda e: e.name):
-                if entry.is_file():
-                    atomic_copy(Path(entry.path), target / entry.name)
+            for entry in _files(folder):
+                atomic_copy(Path(entry.path), target / entry.name)
             atomic_write(marker, "")
         return target / os.path.basename(source)
 
