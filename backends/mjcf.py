@@ -265,10 +265,11 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
                                  colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)  # a PNG says its own
                 material = spec.add_material(name=gname)
                 material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = gname
+                roles = _map_roles() if part.maps else {}
                 for role, image in part.maps:  # data, not colour: read linearly
                     spec.add_texture(name=f"{gname}/{role}", type=kind, file=image,
                                      colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_LINEAR)
-                    material.textures[_map_roles()[role]] = f"{gname}/{role}"
+                    material.textures[roles[role]] = f"{gname}/{role}"
                 kwargs["material"] = gname  # unmodulated: rgba white
             if not part.collides:
                 kwargs.update(contype=0, conaffinity=0)

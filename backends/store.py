@@ -103,7 +103,7 @@ class AssetStore:
                 mtl = f"newmtl texture\nKd 1 1 1\nmap_Kd {target.stem}.png\n"
                 for role, png in maps.items():
                     atomic_write(_map_path(target, role), png)
-                mtl += "".join(_MTL_LINES[role].format(f"{target.stem}_{role}.png") for role in maps)
+                mtl += "".join(_MTL_LINES[role].format(_map_path(target, role).name) for role in maps)
                 atomic_write(target.with_suffix(".mtl"), mtl)
             atomic_write(target, obj)
         return target
@@ -162,15 +162,18 @@ def _map_path(normalised: Path, role: str) -> Path:
     return normalised.with_name(f"{normalised.stem}_{role}.png")
 
 
+@lru_cache(maxsize=256)
 def pbr_maps(texture: str | None) -> tuple[tuple[str, str], ...]:
     """(role, path) of the PBR maps the store wrote beside a mesh's base-colour image, in
-    PBR_MAPS order (none for a `with texture` image or an untextured part)."""
+    PBR_MAPS order (none for a `with texture` image or an untextured part). Cached: every
+    scene asks, and the maps are written before the mesh's OBJ, whose content-hashed name
+    the image's carries, so a name once seen never gains or loses a map."""
     from prsc.mesh_paths import PBR_MAPS
 
     if texture is None:
         return ()
-    base = Path(texture)
-    return tuple((role, str(_map_path(base, role))) for role in PBR_MAPS if _map_path(base, role).is_file())
+    paths = ((role, _map_path(Path(texture), role)) for role in PBR_MAPS)
+    return tuple((role, str(path)) for role, path in paths if path.is_file())
 
 
 def texture_of(normalised: Path | str) -> Path | None:

@@ -91,6 +91,7 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
     # Turning about the vertical keeps a top-down pose, so without `facing` that turn is free.
     horizontal = np.eye(3) - np.outer(DOWN, DOWN) if facing is None else np.eye(3)
     q = np.clip(np.array(q, float), arm.lower, arm.upper)
+    wanted_side = None if facing is None else _cross(DOWN, facing[1])  # the wanted frame's third axis
     best, since_best = math.inf, 0
     for _ in range(iterations):
         data.qpos[arm.qpos] = q
@@ -105,7 +106,7 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
             # The rotation from the tool's frame to the wanted one, from all three axes (half the
             # sum of their cross products): the two given ones alone count a tilt twice.
             pointing = rotation @ facing[0]
-            turn = 0.5 * (turn + _cross(pointing, facing[1]) + _cross(_cross(axis, pointing), _cross(DOWN, facing[1])))
+            turn = 0.5 * (turn + _cross(pointing, facing[1]) + _cross(_cross(axis, pointing), wanted_side))
             tilt += math.acos(min(1.0, max(-1.0, float(pointing @ facing[1]))))
         if miss < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE:
             return q, True

@@ -170,10 +170,9 @@ PBR_MAPS = ("normal", "orm")  # the maps a textured mesh keeps beside its base c
 
 def pbr_images(mesh) -> dict[str, object]:
     """The normal map and the occlusion-roughness-metallic map (PIL images, by PBR_MAPS role)
-    of a textured glTF mesh, those it has. glTF packs roughness in G and metallic in B of one
-    image, the layout MuJoCo's `orm` role and UsdPreviewSurface's channels read."""
-    if base_color_image(mesh) is None:
-        return {}
+    of a glTF mesh that `base_color_image` found textured, those it has. glTF packs roughness
+    in G and metallic in B of one image, the layout MuJoCo's `orm` role and UsdPreviewSurface's
+    channels read."""
     material = mesh.visual.material
     images = {"normal": getattr(material, "normalTexture", None), "orm": getattr(material, "metallicRoughnessTexture", None)}
     return {role: image for role, image in images.items() if image is not None}

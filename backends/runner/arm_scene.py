@@ -42,6 +42,12 @@ class SceneArm:
         joints = [prefix + j.name for j in asset.joints if prefix + j.name in moving]
         return SceneArm(robot, asset, prefix, ArmFrames.of(model, joints, tool), tool)
 
+    def root_and_heading(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[np.ndarray, float]:
+        """Where the arm's root stands in `data`, and the azimuth of its tool about it: each cube
+        is sought from home turned towards it, as `reachable by` sought it (constraints/arm_reach.py)."""
+        root = data.xpos[model.body(self.prefix + self.asset.root).id].copy()
+        return root, self.frames.heading(data, root)
+
 
 def scene_robot(scene: dict, controller: str) -> tuple[dict, object]:
     """The scene's one robot object and its asset."""
@@ -78,16 +84,20 @@ def chain_joints(model: mujoco.MjModel, tool: str) -> set[str]:
     return names
 
 
+def _joint_actuators(model: mujoco.MjModel) -> dict[int, int]:
+    """The actuator that drives each joint directly, by joint id."""
+    return {int(model.actuator_trnid[a, 0]): a for a in range(model.nu)
+            if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)}
+
+
 def driven_joints(model: mujoco.MjModel) -> set[str]:
     """The names of the joints an actuator drives directly."""
-    return {model.joint(model.actuator_trnid[a, 0]).name for a in range(model.nu)
-            if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)}
+    return {model.joint(j).name for j in _joint_actuators(model)}
 
 
 def servos(model: mujoco.MjModel, arm: ArmFrames) -> np.ndarray:
     """The actuator driving each arm joint, in the arm's joint order."""
-    by_joint = {int(model.actuator_trnid[a, 0]): a for a in range(model.nu)
-                if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)}
+    by_joint = _joint_actuators(model)
     joints = [int(np.flatnonzero(model.jnt_qposadr == adr)[0]) for adr in arm.qpos]
     return np.array([by_joint[j] for j in joints])
 

@@ -48,8 +48,7 @@ class Pick:
         gripper = _gripper(scene_arm, model)
         drive = servos(model, arm)
         home = data.qpos[arm.qpos].copy()
-        root = data.xpos[model.body(scene_arm.prefix + scene_arm.asset.root).id].copy()
-        heading = arm.heading(data, root)
+        root, heading = scene_arm.root_and_heading(model, data)
         scratch = mujoco.MjData(model)
         _grip(model, data, gripper, gripper.opened)
         rise = 0.0
@@ -58,10 +57,12 @@ class Pick:
             centre = data.xpos[body].copy()
             scratch.qpos[:] = data.qpos
             towards = turned(home, arm, heading, math.atan2(centre[1] - root[1], centre[0] - root[0]))
-            plan = _grasp_plan(model, scratch, arm, gripper, centre, data.xmat[body].reshape(3, 3), towards)
+            points = _heights(centre)
+            plan = _grasp_plan(model, scratch, arm, gripper, points, data.xmat[body].reshape(3, 3), towards)
             if plan is None:
                 return {"outcome": "unreachable", "reason": f"no top-down grasp of {cube['name']}", "lift": rise}
-            down, up = list(zip(plan, _heights(centre))), list(zip(plan[::-1], _heights(centre)[::-1]))
+            down = list(zip(plan, points))
+            up = down[::-1]
             for q, point in down:
                 ramp(model, data, drive, q)
                 error = settle(model, data, arm, point)
@@ -101,21 +102,22 @@ def _heights(centre: np.ndarray) -> list[np.ndarray]:
     return [centre + np.array([0.0, 0.0, h]) for h in np.arange(LIFT, -1e-9, -DESCENT_STEP)]
 
 
-def _grasp_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper, centre: np.ndarray,
+def _grasp_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper, points: list[np.ndarray],
                 rotation: np.ndarray, towards: np.ndarray) -> list[np.ndarray] | None:
-    """The joints at each of `_heights(centre)` with the closing axis across two of the cube's
-    faces, each solved from the one below it (so the servos follow a straight line), or None.
-    Sought from home turned towards the cube, then from GRASP_RESTARTS starts within the limits."""
+    """The joints at each of `points` (`_heights` of the cube's centre, the last) with the closing
+    axis across two of the cube's faces, each solved from the one below it (so the servos follow
+    a straight line), or None. Sought from home turned towards the cube, then from
+    GRASP_RESTARTS starts within the limits."""
     for start in [towards, *random_starts(arm, towards, GRASP_RESTARTS)]:
-        q, ok = reach_top_down(model, scratch, arm, centre, start, start, LIFT)
+        q, ok = reach_top_down(model, scratch, arm, points[-1], start, start, LIFT)
         if ok:
-            plan = _facing_plan(model, scratch, arm, gripper, centre, rotation, q)
+            plan = _facing_plan(model, scratch, arm, gripper, points, rotation, q)
             if plan is not None:
                 return plan
     return None
 
 
-def _facing_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper, centre: np.ndarray,
+def _facing_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper, points: list[np.ndarray],
                  rotation: np.ndarray, q: np.ndarray) -> list[np.ndarray] | None:
     """`_grasp_plan`'s waypoints from a top-down pose `q` at the cube (the tool at any yaw), or None."""
     # The four side faces' normals, nearest the closing axis as it stands first: the least turn
@@ -127,9 +129,9 @@ def _facing_plan(model, scratch: mujoco.MjData, arm: ArmFrames, gripper: Gripper
     normals = sorted((n / np.linalg.norm(n) for n in normals if np.linalg.norm(n) > 1e-6), key=lambda n: -(n @ axis))
     for normal in normals:
         facing = (gripper.closing, normal)
-        step, ok = solve_top_down(model, scratch, arm, centre, q, facing=facing)
+        step, ok = solve_top_down(model, scratch, arm, points[-1], q, facing=facing)
         plan = [step]
-        for point in _heights(centre)[-2::-1]:
+        for point in points[-2::-1]:
             if not ok:
                 break
             step, ok = solve_top_down(model, scratch, arm, point, plan[-1], facing=facing)

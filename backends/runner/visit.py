@@ -8,8 +8,8 @@ point 10 cm above every cube in turn, coming down from 12 cm above it (the heigh
 It knows nothing of a particular robot: the scene's robot object names its asset (the
 Panda or a URDF/MJCF file), and the asset's description (prsc.asset_files) gives the
 joints, the tool frame and the home pose; the compiled model gives the chain of joints that
-moves the tool and the servos that hold them (a URDF arm gets one per joint from prsc). IK is prsc/arm_ik.py on a scratch
-copy of the scene's model. Outcomes: `visited` (the tool came within 1 cm of every point,
+moves the tool and the servos that hold them (a URDF arm gets one per joint from prsc). IK
+is prsc/arm_ik.py on a scratch copy of the scene's model. Outcomes: `visited` (the tool came within 1 cm of every point,
 pointing down within 0.1 rad), `unreachable` (no top-down pose for a point), `missed` (the
 servos did not get the tool there in 4 s). Copy it as the start of a controller of your own.
 """
@@ -42,10 +42,7 @@ class Visit:
         drive = servos(model, arm)
         home = data.qpos[arm.qpos].copy()
         scratch = mujoco.MjData(model)
-        # Where the tool heads at home, about the arm's root: each cube is sought from home
-        # turned towards it, as `reachable by` sought it (prsc/constraints/arm_reach.py).
-        root = data.xpos[model.body(scene_arm.prefix + scene_arm.asset.root).id]
-        heading = arm.heading(data, root)
+        root, heading = scene_arm.root_and_heading(model, data)
         worst = 0.0
         q = home
         for cube in scene_cubes(scene):

@@ -65,14 +65,16 @@ def _longest_run(reached: list[bool], halves: list[float]) -> list[int]:
     start = reached.index(False)
     best: list[int] = []
     run: list[int] = []
+    best_width = width = 0.0  # the half angles of `best` and `run`, added in order
     for step in range(1, n + 1):
         j = (start + step) % n
         if reached[j]:
             run.append(j)
-            if sum(halves[i] for i in run) > sum(halves[i] for i in best) + 1e-12:
-                best = list(run)
+            width += halves[j]
+            if width > best_width + 1e-12:
+                best, best_width = list(run), width
         else:
-            run = []
+            run, width = [], 0.0
     return best
 
 

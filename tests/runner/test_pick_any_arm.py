@@ -43,8 +43,9 @@ def _spec(folder: Path, arm: str, cube: str = "Cube", tcp: str = "") -> Path:
     return spec
 
 
-def _prsc(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "prsc.cli", *args], capture_output=True, text=True, timeout=600)
+def _prsc(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "prsc.cli", *args], capture_output=True, text=True, timeout=600,
+                          env=env)
 
 
 def _tcp(name: str) -> str:
@@ -72,9 +73,8 @@ def _compiled(tmp_path: Path, spec: Path, build: Path | None = None) -> Path:
     warnings (trimesh warned, All-NaN slice, on the Franka's OBJ faces without UVs)."""
     import os
 
-    done = subprocess.run([sys.executable, "-m", "prsc.cli", "compile", str(spec), "-I", str(DATA), "-n", "1",
-                           "--target", "json,mjcf", "-o", str(tmp_path / "out")], capture_output=True, text=True,
-                          timeout=600, env={**os.environ, **({"PRSC_BUILD_DIR": str(build)} if build else {})})
+    done = _prsc("compile", str(spec), "-I", str(DATA), "-n", "1", "--target", "json,mjcf", "-o", str(tmp_path / "out"),
+                 env={**os.environ, "PRSC_BUILD_DIR": str(build)} if build else None)
     assert done.returncode == 0, done.stderr
     if build:
         assert "Warning" not in done.stderr and list(build.rglob("*.obj")), done.stderr
