@@ -52,12 +52,16 @@ class HeldCube:
         above = cube + up * APPROACH_HEIGHT
         lifted = cube + up * LIFT_HEIGHT
         over_place = place + up * max(LIFT_HEIGHT, APPROACH_HEIGHT)
-        q_above = arm.plan_point(above, home, f"the point above the cube ({stage})")
-        descend = arm.plan_line(above, cube, q_above, f"the cube ({stage})")
-        lift = arm.plan_line(cube, lifted, descend[-1], f"the lift above the cube ({stage})")
-        q_over = arm.plan_point(over_place, lift[-1], f"the point above the release ({stage})")
-        lower = arm.plan_line(over_place, place, q_over, f"the release point ({stage})")
-        retreat = arm.plan_line(place, over_place, lower[-1], f"the retreat ({stage})")
+
+        def plan_on(q_above: np.ndarray) -> tuple[list[np.ndarray], ...]:
+            descend = arm.plan_line(above, cube, q_above, f"the cube ({stage})")
+            lift = arm.plan_line(cube, lifted, descend[-1], f"the lift above the cube ({stage})")
+            q_over = arm.plan_point(over_place, lift[-1], f"the point above the release ({stage})")
+            lower = arm.plan_line(over_place, place, q_over, f"the release point ({stage})")
+            return descend, lift, [q_over], lower, arm.plan_line(place, over_place, lower[-1], f"the retreat ({stage})")
+
+        q_above, (descend, lift, (q_over,), lower, retreat) = arm.plan_from_home(
+            above, f"the point above the cube ({stage})", plan_on)
 
         start_z = self.position()[2]
         sim.move(arm, [q_above])

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Iterator
 
 import mink
 import mujoco
@@ -15,6 +16,13 @@ POSITION_TOLERANCE = 0.005
 ORIENTATION_TOLERANCE = np.radians(3.0)
 _MAX_ITERATIONS = 300
 _DT = 0.05
+# Starts drawn within the joint limits, tried after home and home turned towards the target: from
+# home alone the 7-joint arm stalls at points it reaches (at +-75 and 165 degrees about the base
+# the reach seemed to end at 0.64 m at the table's height, where the neighbours reach 0.8 m).
+RESTARTS = 8
+# m two of the arm's own links may overlap before a pose counts as colliding with itself: the
+# collision meshes of neighbours two links apart overlap by a few mm in ordinary poses.
+SELF_PENETRATION = 0.005
 
 
 @dataclass(frozen=True)
@@ -24,11 +32,13 @@ class IKSolution:
     q: np.ndarray
     position_error: float
     orientation_error: float
+    self_collision: bool = False  # the pose puts one of the arm's links into another
 
     @property
     def reached(self) -> bool:
-        """Whether the target was reached within tolerance."""
-        return self.position_error <= POSITION_TOLERANCE and self.orientation_error <= ORIENTATION_TOLERANCE
+        """Whether the target was reached within tolerance, by a pose free of the arm itself."""
+        return (self.position_error <= POSITION_TOLERANCE and self.orientation_error <= ORIENTATION_TOLERANCE
+                and not self.self_collision)
 
 
 class ArmIK:
@@ -36,6 +46,9 @@ class ArmIK:
 
     def __init__(self, base_pos: np.ndarray, base_quat: np.ndarray):
         spec = panda.panda_mjcf_spec()
+        # The arm alone, with its own collision meshes: which poses put a link into another.
+        self._collider = spec.compile()
+        self._collider_data = mujoco.MjData(self._collider)
         # Kinematics only: no contacts needed.
         spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
         self.model = spec.compile()
@@ -48,6 +61,10 @@ class ArmIK:
         self.limits = [mink.ConfigurationLimit(self.model)]
         self.home = self.full_q(np.array(panda.HOME_QPOS))
         self.posture_task.set_target(self.home)
+        lower, upper = self.model.jnt_range[[self.model.joint(j).id for j in panda.ARM_JOINTS]].T
+        self._random_starts = list(np.random.default_rng(0).uniform(lower, upper, (RESTARTS, len(lower))))
+        self._first_joint = (float(lower[0]), float(upper[0]))
+        self._last_joint = (float(lower[-1]), float(upper[-1]))
 
     def place(self, base_pos: np.ndarray, base_quat: np.ndarray) -> None:
         """Put the arm's base at a world pose (the model is re-posed, not compiled again)."""
@@ -85,6 +102,50 @@ class ArmIK:
         q = self.configuration.q[self._qadr].copy()
         return IKSolution(q=q, position_error=float(np.linalg.norm(error[:3])),
                           orientation_error=float(np.linalg.norm(error[3:])))
+
+    def solutions_from_home(self, position: np.ndarray, rotation: np.ndarray) -> Iterator[IKSolution]:
+        """Joint angles reaching a world pose, one per start that gets there: home, home turned
+        towards it, then RESTARTS starts within the joint limits (the same every call). A caller
+        that must go on from the pose (down to a cube, up again) takes the first it can go on from."""
+        home = np.array(panda.HOME_QPOS)
+        for start in (home, self._turned(home, np.asarray(position, float)), *self._random_starts):
+            solution = self.solve_free(position, rotation, start)
+            if solution.reached:
+                yield solution
+
+    def solve_from_home(self, position: np.ndarray, rotation: np.ndarray) -> IKSolution:
+        """The first of `solutions_from_home`, else home's answer (which says how far it stayed)."""
+        for solution in self.solutions_from_home(position, rotation):
+            return solution
+        return self.solve_free(position, rotation, np.array(panda.HOME_QPOS))
+
+    def solve_free(self, position: np.ndarray, rotation: np.ndarray, start_q: np.ndarray) -> IKSolution:
+        """`solve`, its answer marked when the pose puts one of the arm's links into another."""
+        solution = self.solve(position, rotation, start_q)
+        return replace(solution, self_collision=self.self_collides(solution.q))
+
+    def self_collides(self, arm_q: np.ndarray) -> bool:
+        """Whether two links of the arm that are not parent and child overlap at these joint angles
+        (by more than SELF_PENETRATION): a top-down pose beside the base puts the hand into it."""
+        data = self._collider_data
+        data.qpos[:] = self.full_q(arm_q)
+        mujoco.mj_kinematics(self._collider, data)
+        mujoco.mj_collision(self._collider, data)
+        return bool(np.any(data.contact.dist[:data.ncon] < -SELF_PENETRATION))
+
+    def _turned(self, home: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """Home with the base joint turned so that the tool heads towards the target (within its
+        limits), and the wrist turned back by as much (by a full turn more or less where that is
+        within its limits), so the hand keeps home's orientation: the IK need not turn it."""
+        base = self.model.body_pos[self._base]
+        tool = self.tcp_pose(home)[0]
+        turn = np.arctan2(target[1] - base[1], target[0] - base[0]) - np.arctan2(tool[1] - base[1], tool[0] - base[0])
+        q = home.copy()
+        q[0] = float(np.clip(q[0] + (turn + np.pi) % (2 * np.pi) - np.pi, *self._first_joint))
+        low, high = self._last_joint
+        wrist = [q[6] + q[0] - home[0] + k * 2 * np.pi for k in (0, -1, 1)]
+        q[6] = next((w for w in wrist if low <= w <= high), q[6])
+        return q
 
 
 _solvers: dict[str, ArmIK] = {}

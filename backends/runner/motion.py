@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable, TypeVar
 
 import mujoco
 import numpy as np
@@ -11,6 +12,7 @@ from prsc.assets import panda
 from prsc.backends.runner.harness import snapshot
 from prsc.backends.runner.ik import ArmIK, IKSolution, arm_ik
 
+T = TypeVar("T")
 CONTROL_STEPS = 5  # physics steps per control update (10 ms at the 2 ms timestep)
 JOINT_SPEED = 1.2  # rad/s, average over a move (min-jerk peaks at 1.9x, under the Panda's 2.17)
 MIN_MOVE_SECONDS = 0.4
@@ -24,6 +26,7 @@ class Unreachable(Exception):
         super().__init__(
             f"{arm} cannot reach {label}: IK residual {solution.position_error * 100:.1f} cm, "
             f"{np.degrees(solution.orientation_error):.1f} deg"
+            + (" (the pose puts the arm into itself)" if solution.self_collision else "")
         )
         self.solution = solution
 
@@ -71,6 +74,18 @@ class Arm:
             q = solution.q
             path.append(q)
         return path
+
+    def plan_from_home(self, target: np.ndarray, label: str, then: Callable[[np.ndarray], T]) -> tuple[np.ndarray, T]:
+        """Joint angles putting the tool centre top-down at `target`, sought from home as `reachable by`
+        was built (ArmIK.solutions_from_home), and what `then` plans on from them: the first pose it can
+        plan on from (else its Unreachable)."""
+        failure: Unreachable | None = None
+        for solution in self.ik.solutions_from_home(target, self.down):
+            try:
+                return solution.q, then(solution.q)
+            except Unreachable as error:
+                failure = failure or error
+        raise failure or Unreachable(self.name, label, self.ik.solve_from_home(target, self.down))
 
     def plan_point(self, target: np.ndarray, q_start: np.ndarray, label: str) -> np.ndarray:
         """Joint angles putting the tool centre top-down at `target`."""

@@ -6,17 +6,19 @@ imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK. 
 command, not a backend: it drives the runner's IK and, for the tray report, samples a spec.)
 
 Reachable means what the handover controller needs (backends/runner/handover.py): with
-the gripper pointing down as at home, the tool centre reaches the point, the point 12 cm
-above it (the approach) and 15 cm above it (the lift), each IK solved from the previous
-one as the controller does. Along each ray from the base (24 directions, every 15
-degrees) and at each height (HEIGHTS) the longest run of reachable radii is scanned every
-5 cm and its ends bisected to 3 mm.
+the gripper pointing down as at home, the tool centre reaches the point 12 cm above it
+(the approach, sought from home with restarts as the controller seeks it), the point and
+15 cm above it (the lift), each IK solved from the previous one, in poses that do not put
+the arm into itself. Along each ray from the base (SECTORS directions) and at each height
+(HEIGHTS) the longest run of reachable radii is scanned every 5 cm and its ends bisected
+to 3 mm.
 
 The reachable set is an annulus about the base, not convex. prsc keeps it as a ring of
 exact rows (panda_ring, prsc/constraints/reach_ring.py): an outer convex cell under the
 chord of every sector's outer radius, minus a convex hole about the largest inner radii,
-over the heights CELL_LEVELS, each bound shrunk by a margin. docs/sampling.md reports how
-much of a tray it keeps (`--tray-report SPEC` measures it against the IK on a grid).
+over the heights, each bound shrunk by a margin. docs/sampling.md reports how much of the
+true reach it keeps (`--coverage`, on the base's plane) and of a tray (`--tray-report SPEC`),
+each against the IK on a grid.
 
 `prsc reach ARM_FILE` does the same for an arm from a file (prsc/constraints/arm_reach.py)
 and measures the ring against the arm's true top-down reach on a grid.
@@ -38,13 +40,13 @@ from prsc.geometry.rotations import quat_to_matrix
 
 APPROACH = 0.12  # m: the controller's approach height above the grasp point
 LIFT = 0.15  # m: the controller's lift
-HEIGHTS = (-0.05, 0.0, 0.05, 0.15, 0.25, 0.35)  # m above the base: the levels the cells span
-SECTORS = 24
+HEIGHTS = (0.0, 0.05, 0.15)  # m above the base: the levels the ring spans
+SECTORS = 48
 RADII = tuple(round(0.1 + 0.05 * i, 3) for i in range(19))  # the coarse scan, m
 REFINE = 4  # bisections of each end of the reachable run (5 cm / 2^4 ~ 3 mm)
-MARGIN = 0.01  # m taken off the outer radii
-INNER_MARGIN = 0.03  # m added to the inner radius: near the base the IK fails in scattered spots
-CELL_LEVELS = (1, 2, 3)  # the heights (indices) the one convex cell spans: 0 to 15 cm above the base
+MARGIN = 0.001  # m taken off the outer radii (each a radius the IK reached, the chords between them inside)
+INNER_MARGIN = 0.01  # m added to the inner radii: near the base the reach is patchy (5 mm kept one point it misses)
+COVERAGE_EXTENT = 0.9  # m: the grid of `--coverage` reaches past the farthest radius any ray reaches (0.81)
 
 OUTPUT = Path(__file__).resolve().parent.parent / "constraints" / "panda_reach.json"
 
@@ -61,15 +63,17 @@ class TopDownReach:
         self.down = self.ik.tcp_pose(self.home)[1]
 
     def reaches(self, point: np.ndarray) -> bool:
-        """Approach from home, then the point, then the lift, each from the previous solution."""
+        """The approach sought from home as the controller seeks it (ArmIK.solutions_from_home), then
+        the point, then the lift, each from the previous solution, none putting a link into another."""
         up = np.array([0.0, 0.0, 1.0])
-        q = self.home
-        for target in (point + APPROACH * up, point, point + LIFT * up):
-            solution = self.ik.solve(np.asarray(target, float), self.down, q)
-            if not solution.reached:
-                return False
-            q = solution.q
-        return True
+        for solution in self.ik.solutions_from_home(np.asarray(point + APPROACH * up, float), self.down):
+            for target in (point, point + LIFT * up):
+                solution = self.ik.solve_free(np.asarray(target, float), self.down, solution.q)
+                if not solution.reached:
+                    break
+            else:
+                return True
+        return False
 
 
 def _angles() -> list[float]:
@@ -114,23 +118,28 @@ def _boundary(reach: TopDownReach, angle: float, height: float, inside: float, o
 
 
 def panda_ring(rays: dict, angles: list[float]) -> ReachRing:
-    """The reach kept over the heights CELL_LEVELS: an outer cell minus a hole and a gap
+    """The reach kept over the heights: an outer cell minus a hole and a gap
     (prsc/constraints/reach_ring.py); the rays' angles turn from +y (ahead here) to the ring's
     x-ahead convention by +90 deg."""
-    per_ray = [[rays[k, j] for k in CELL_LEVELS] for j in range(SECTORS)]
-    return ring_from_rays([a + math.pi / 2 for a in angles[:SECTORS]], [HEIGHTS[k] for k in CELL_LEVELS], per_ray,
-                          MARGIN, INNER_MARGIN)
+    per_ray = [[rays[k, j] for k in range(len(HEIGHTS))] for j in range(SECTORS)]
+    return ring_from_rays([a + math.pi / 2 for a in angles[:SECTORS]], list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)
 
 
 def compute() -> dict:
-    """The reachable-set data of the Panda (a few minutes of IK)."""
+    """The reachable-set data of the Panda (minutes of IK)."""
     reach = TopDownReach()
     angles = _angles()
     rays: dict[tuple[int, int], tuple[float, float] | None] = {}
     for k, height in enumerate(HEIGHTS):
         for j in range(SECTORS):
             rays[k, j] = ray_interval(reach, angles[j], height)
-        rays[k, SECTORS] = rays[k, 0]
+    return reach_data(rays)
+
+
+def reach_data(rays: dict[tuple[int, int], tuple[float, float] | None]) -> dict:
+    """The data file's content from the rays: (height index, ray index) -> the reached run or None."""
+    angles = _angles()
+    rays = {**rays, **{(k, SECTORS): rays[k, 0] for k in range(len(HEIGHTS))}}
     ring = panda_ring(rays, angles)
     return {
         "robot": "panda",
@@ -141,7 +150,7 @@ def compute() -> dict:
         "rays": [[k, j, *(rays[k, j] or (None, None))] for k in range(len(HEIGHTS)) for j in range(SECTORS)],
         "margin": MARGIN,
         "inner_margin": INNER_MARGIN,
-        "ring": {**ring_json(ring), "heights": [HEIGHTS[CELL_LEVELS[0]], HEIGHTS[CELL_LEVELS[-1]]]},
+        "ring": {**ring_json(ring), "heights": [HEIGHTS[0], HEIGHTS[-1]]},
     }
 
 
@@ -182,6 +191,26 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
         "reachable_fraction_of_tray": counts["reached"] / n,
         "reachable_kept_by_cell": counts["both"] / max(counts["reached"], 1),
         "cell_points_not_reached": counts["in_cell"] - counts["both"],
+    }
+
+
+def panda_coverage(step: float = 0.03) -> dict:
+    """What the shipped ring keeps of the Panda's true top-down reach at its base's height: the
+    IK (TopDownReach, as the controller seeks a pose) at every point of a grid about the base."""
+    from prsc.constraints.reach import reach_ring
+
+    ring = reach_ring("panda")
+    assert ring is not None
+    reach = TopDownReach()
+    xs = np.arange(-COVERAGE_EXTENT, COVERAGE_EXTENT + step / 2, step)
+    points = np.array([[x, y, 0.0] for x in xs for y in xs if math.hypot(x, y) <= COVERAGE_EXTENT])
+    reached = np.array([reach.reaches(p) for p in points], dtype=bool)
+    kept = contains(ring, points)
+    return {
+        "step": step, "points": len(points), "reached": int(reached.sum()), "kept_and_reached": int((kept & reached).sum()),
+        "reached_kept_by_ring": float((kept & reached).sum() / max(reached.sum(), 1)),
+        "kept_not_reached": int((kept & ~reached).sum()),
+        "farthest_kept": float(np.max(np.hypot(*points[kept, :2].T))) if kept.any() else 0.0,
     }
 
 
@@ -297,13 +326,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--output", default=str(OUTPUT), help=f"where to write (default {OUTPUT})")
     parser.add_argument("--tray-report", metavar="SPEC", help="instead: the fraction of tr_1 that c1 keeps under r1, vs IK")
+    parser.add_argument("--coverage", action="store_true",
+                        help="instead: what the ring keeps of the true reach at the base's height (3 cm grid, vs IK)")
     args = parser.parse_args()
     if args.tray_report:
         print(json.dumps(tray_report(args.tray_report, "tr_1", "c1", "r1"), indent=1))
         return
+    if args.coverage:
+        print(json.dumps(panda_coverage(), indent=1))
+        return
     data = compute()
     atomic_write(args.output, json.dumps(data, indent=1) + "\n")
-    print(f"{len(data['cell']['b'])} rows of the cell written to {args.output}")
+    print(f"{len(data['ring']['b'])} rows of the ring written to {args.output}")
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ from prsc.constraints import lower_program
 from prsc.constraints.reach import reach_ring, reach_file
 from prsc.errors import PrscError
 from prsc.geometry.polytope import Polytope
-from prsc.constraints.reach_ring import contains, ring_json
+from prsc.constraints.reach_ring import contains
 from prsc.geometry.sampler import prepare_sampler
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
@@ -35,15 +35,14 @@ def _points(a: np.ndarray, b: np.ndarray, n: int, seed: int) -> np.ndarray:
     return prepare_sampler(Polytope.from_rows(a, b)).sample(np.random.default_rng(seed), n)
 
 
-def test_the_cell_is_what_the_script_derives_from_its_ik_rays():
+def test_the_ring_is_what_the_script_derives_from_its_ik_rays():
     from prsc.commands import reach
 
     data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
+    assert data["heights"] == list(reach.HEIGHTS) and len(data["angles"]) == reach.SECTORS
     rays = {(k, j): (None if lo is None else (lo, hi)) for k, j, lo, hi in data["rays"]}
-    for k in range(len(data["heights"])):
-        rays[k, reach.SECTORS] = rays[k, 0]
-    ring = reach.panda_ring(rays, reach._angles())
-    for key, value in ring_json(ring).items():
+    derived = reach.reach_data(rays)
+    for key, value in derived["ring"].items():
         np.testing.assert_allclose(np.array(data["ring"][key]), np.array(value), atol=1e-12)
 
 
@@ -64,6 +63,25 @@ def test_points_in_the_ring_are_reached_top_down_and_points_past_it_are_not(arm)
     candidates = _points(a, b + np.where(outer, 0.3, 0.0), 400, seed=2)
     beyond = [p for p in candidates if math.hypot(p[0], p[1]) > longest + 0.05][:6]
     assert len(beyond) == 6 and not any(arm.reaches(p) for p in beyond)
+
+
+def test_a_pose_with_the_hand_inside_the_base_is_not_reached(arm):
+    # Beside the base at its height the IK puts the tool on the point, with the hand in link0.
+    point = np.array([0.1, 0.05, 0.0])
+    solution = arm.ik.solve(point, arm.down, arm.home)
+    assert solution.position_error < 1e-3 and solution.orientation_error < 1e-2
+    assert arm.ik.self_collides(solution.q) and not arm.ik.self_collides(arm.home)
+    assert not arm.ik.solve_free(point, arm.down, arm.home).reached
+    assert not arm.reaches(point)
+
+
+def test_a_point_home_alone_misses_is_sought_from_home_turned_towards_it(arm):
+    # 0.66 m out at 75 degrees to the left, 12 cm up (a cube's approach): the IK from home stalls
+    # 12 cm short; from home turned towards it, wrist turned back, it gets there.
+    above = np.array([-0.638, 0.171, 0.12])
+    assert arm.ik.solve(above, arm.down, arm.home).position_error > 0.05
+    assert arm.ik.solve_from_home(above, arm.down).reached
+    assert arm.reaches(above - [0.0, 0.0, 0.12])
 
 
 def test_the_constraint_stage_reads_data_and_never_imports_mujoco():
