@@ -104,20 +104,23 @@ class ArmIK:
                           orientation_error=float(np.linalg.norm(error[3:])))
 
     def solutions_from_home(self, position: np.ndarray, rotation: np.ndarray) -> Iterator[IKSolution]:
-        """Joint angles reaching a world pose, one per start that gets there: home, home turned
-        towards it, then RESTARTS starts within the joint limits (the same every call). A caller
-        that must go on from the pose (down to a cube, up again) takes the first it can go on from."""
+        """Every start's answer for a world pose, in order: home, home turned towards it, then RESTARTS
+        starts within the joint limits (the same every call). A caller that must go on from the pose
+        (down to a cube, up again) takes the first reached one it can go on from; home's answer says
+        how far the IK stayed when none is reached."""
         home = np.array(panda.HOME_QPOS)
         for start in (home, self._turned(home, np.asarray(position, float)), *self._random_starts):
-            solution = self.solve_free(position, rotation, start)
-            if solution.reached:
-                yield solution
+            yield self.solve_free(position, rotation, start)
 
     def solve_from_home(self, position: np.ndarray, rotation: np.ndarray) -> IKSolution:
-        """The first of `solutions_from_home`, else home's answer (which says how far it stayed)."""
+        """The first reached of `solutions_from_home`, else home's answer."""
+        first = None
         for solution in self.solutions_from_home(position, rotation):
-            return solution
-        return self.solve_free(position, rotation, np.array(panda.HOME_QPOS))
+            if solution.reached:
+                return solution
+            first = first or solution
+        assert first is not None
+        return first
 
     def solve_free(self, position: np.ndarray, rotation: np.ndarray, start_q: np.ndarray) -> IKSolution:
         """`solve`, its answer marked when the pose puts one of the arm's links into another."""

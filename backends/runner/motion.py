@@ -80,12 +80,17 @@ class Arm:
         was built (ArmIK.solutions_from_home), and what `then` plans on from them: the first pose it can
         plan on from (else its Unreachable)."""
         failure: Unreachable | None = None
+        home: IKSolution | None = None
         for solution in self.ik.solutions_from_home(target, self.down):
+            home = home or solution
+            if not solution.reached:
+                continue
             try:
                 return solution.q, then(solution.q)
             except Unreachable as error:
                 failure = failure or error
-        raise failure or Unreachable(self.name, label, self.ik.solve_from_home(target, self.down))
+        assert home is not None
+        raise failure or Unreachable(self.name, label, home)
 
     def plan_point(self, target: np.ndarray, q_start: np.ndarray, label: str) -> np.ndarray:
         """Joint angles putting the tool centre top-down at `target`."""

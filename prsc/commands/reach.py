@@ -67,6 +67,8 @@ class TopDownReach:
         the point, then the lift, each from the previous solution, none putting a link into another."""
         up = np.array([0.0, 0.0, 1.0])
         for solution in self.ik.solutions_from_home(np.asarray(point + APPROACH * up, float), self.down):
+            if not solution.reached:
+                continue
             for target in (point, point + LIFT * up):
                 solution = self.ik.solve_free(np.asarray(target, float), self.down, solution.q)
                 if not solution.reached:
@@ -205,11 +207,17 @@ def panda_coverage(step: float = 0.03) -> dict:
     xs = np.arange(-COVERAGE_EXTENT, COVERAGE_EXTENT + step / 2, step)
     points = np.array([[x, y, 0.0] for x in xs for y in xs if math.hypot(x, y) <= COVERAGE_EXTENT])
     reached = np.array([reach.reaches(p) for p in points], dtype=bool)
+    return {"step": step, "points": len(points), **ring_coverage(ring, points, reached)}
+
+
+def ring_coverage(ring: ReachRing, points: np.ndarray, reached: np.ndarray) -> dict:
+    """What a ring keeps of the points a tool reaches: counts, the fraction, and its farthest kept point."""
     kept = contains(ring, points)
+    both = int(np.count_nonzero(kept & reached))
     return {
-        "step": step, "points": len(points), "reached": int(reached.sum()), "kept_and_reached": int((kept & reached).sum()),
-        "reached_kept_by_ring": float((kept & reached).sum() / max(reached.sum(), 1)),
-        "kept_not_reached": int((kept & ~reached).sum()),
+        "reached": int(reached.sum()), "kept_and_reached": both,
+        "reached_kept_by_ring": both / max(int(reached.sum()), 1),
+        "kept_not_reached": int(kept.sum()) - both,
         "farthest_kept": float(np.max(np.hypot(*points[kept, :2].T))) if kept.any() else 0.0,
     }
 
@@ -259,13 +267,11 @@ def run(args) -> int:
           f"{reach_cache(asset)}")
     height = HEIGHTS[0]
     grid = true_reach_grid(asset, height, args.grid)
-    kept = contains(ring, grid.points)
-    reached = grid.reached
-    both = int(np.count_nonzero(kept & reached))
-    far = float(np.max(np.hypot(*grid.points[kept, :2].T))) if kept.any() else 0.0
+    kept = ring_coverage(ring, grid.points, grid.reached)
     print(f"  at the root's height, on a {args.grid * 100:g} cm grid with the IK ({grid.seconds:.1f} s): the tool reaches "
-          f"{int(reached.sum())} points top-down; the ring keeps {both} of them ({100 * both / max(int(reached.sum()), 1):.1f} %) "
-          f"and {int(kept.sum()) - both} points it does not reach; farthest kept point {far:.3f} m from the base")
+          f"{kept['reached']} points top-down; the ring keeps {kept['kept_and_reached']} of them "
+          f"({100 * kept['reached_kept_by_ring']:.1f} %) and {kept['kept_not_reached']} points it does not reach; "
+          f"farthest kept point {kept['farthest_kept']:.3f} m from the base")
     if args.plot:
         _plot(ring, grid, args.plot, asset.name)
         print(f"drawn: {args.plot}")
