@@ -99,8 +99,13 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
     result = sampler.sample(seed, index)
     ctx = result.context
     out = [f"spec: {sampler.spec}", "evaluation order: " + ", ".join(p.name for p in cprog.objects)]
-    out.append("drawn in batches (docs/sampling.md, \"Batched sampling\")" if sampler.batched
-               else f"drawn one scene at a time: {sampler.unbatched_because}")
+    if sampler.batched:
+        out.append("drawn in batches (docs/sampling.md, \"Batched sampling\")")
+    elif sampler.candidates:
+        out.append("drawn by candidate rounds, Gibbs sweeps where none passes (docs/sampling.md, \"Candidate rounds\")")
+    else:
+        out.append(f"drawn one scene at a time: {sampler.unbatched_because}"
+                   + (f"; Gibbs sweeps, not candidate rounds: {sampler.no_candidates_because}" if sampler.law == "joint" else ""))
     out.append(f"rows are on each object's centre p = (x, y, z); random inputs as drawn in scene {index} of seed {seed}")
     if cprog.scene_checks:
         out.append("requires on no object (checked once per scene):")

@@ -186,3 +186,34 @@ def minkowski_obstacle(
     # Finite by construction (unit axes, finite boxes): the rows need no checks of from_rows.
     return Polytope(rows, np.concatenate([mid + reach, -mid + reach]), _NO_EQUALITIES, _NO_EQ_OFFSETS,
                     np.full(len(rows), label, dtype=np.int64), _NO_EQ_LABELS)
+
+
+def pair_overlaps(
+    centers_a: ArrayLike, ra: ArrayLike, ha: ArrayLike,
+    centers_b: ArrayLike, rb: ArrayLike, hb: ArrayLike,
+) -> NDArray[np.float64]:
+    """The smallest projection overlap over the 15 SAT axes of N box pairs (A_i, B_i), (N,).
+
+    `projection_overlaps` with box A varying too: centers (N, 3), rotations (N, 3, 3), half
+    extents (N, 3). Boxes collide when it exceeds the contact tolerance (boxes_collide)."""
+    ra = np.asarray(ra, dtype=float)
+    rb = np.asarray(rb, dtype=float)
+    ha = np.asarray(ha, dtype=float)
+    hb = np.asarray(hb, dtype=float)
+    d = np.asarray(centers_b, dtype=float) - np.asarray(centers_a, dtype=float)
+    t = np.einsum("ni,nij->nj", d, ra)  # offset in A's frame
+    c = np.einsum("nki,nkj->nij", ra, rb)  # c[:, i, j] = a_i . b_j
+    ac = np.abs(c)
+    best = np.min(ha + np.einsum("nij,nj->ni", ac, hb) - np.abs(t), axis=1)
+    proj = np.einsum("ni,nij->nj", t, c)
+    best = np.minimum(best, np.min(np.einsum("ni,nij->nj", ha, ac) + hb - np.abs(proj), axis=1))
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            dist = np.abs(t[:, i2] * c[:, i1, j] - t[:, i1] * c[:, i2, j])
+            r = ha[:, i1] * ac[:, i2, j] + ha[:, i2] * ac[:, i1, j] + hb[:, j1] * ac[:, i, j2] + hb[:, j2] * ac[:, i, j1]
+            length = np.hypot(c[:, i1, j], c[:, i2, j])
+            ok = length > _PARALLEL
+            best = np.minimum(best, np.where(ok, (r - dist) / np.where(ok, length, 1.0), np.inf))
+    return best

@@ -162,7 +162,7 @@ def _point(rt: ObjectRuntime, compiler: BatchCompiler) -> BatchObject:
         raise Unbatchable(f"{name}'s `at` is not a vector")
     box = _box_corners(point.lo, point.hi)
     static = provider.static_rows
-    if static is not None and (len(static.d) or not _inside(static, box)):
+    if static is not None and (len(static.d) or not rows_hold(static, box)):
         raise Unbatchable(f"{name}'s `at` point may leave its other rows")
     return BatchObject(name, rt.rotation, rt.half, rt.reach, box, point=point)  # type: ignore[arg-type]
 
@@ -182,7 +182,7 @@ def _anchored(rt: ObjectRuntime, placed: dict[str, BatchObject]) -> BatchObject:
     static = provider.static_rows
     # With twice the sequential sampler's margin (regions.RegionProvider._anchored_region): its
     # test on one scene's rounded numbers then passes too.
-    if static is not None and not _inside(static, carried, margin=2 * TOL):
+    if static is not None and not rows_hold(static, carried, margin=2 * TOL):
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
     return BatchObject(name, rt.rotation, rt.half, rt.reach, carried, region=prepared.sampler,  # type: ignore[arg-type]
                        anchor=anchor, prepared=prepared)
@@ -217,7 +217,7 @@ def _box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)], dtype=float)
 
 
-def _inside(rows: Polytope, points: np.ndarray, margin: float = 0.0) -> bool:
+def rows_hold(rows: Polytope, points: np.ndarray, margin: float = 0.0) -> bool:
     """Whether every point meets every inequality row (with `margin` metres to spare, scaled as the sampler's)."""
     if not len(rows.b):
         return True

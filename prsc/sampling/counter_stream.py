@@ -73,3 +73,15 @@ def uniforms(keys: np.ndarray, site: int, width: int) -> np.ndarray:
         z *= _GOLDEN
         _mix(z)
     return (z >> _S11).astype(np.float64) * _UNIT
+
+
+def candidate_keys(keys: np.ndarray, first: int, count: int) -> np.ndarray:
+    """Keys of candidates first .. first+count-1 of each scene key, scene major: shape (len(keys) * count,).
+
+    The same mixer keyed by the scene's key, so candidate c of a scene depends on (key, c) alone."""
+    counters = (np.arange(first, first + count, dtype=np.uint64) + np.uint64(1)) * _GOLDEN
+    with np.errstate(over="ignore"):
+        z = np.asarray(keys, dtype=np.uint64)[:, None] ^ _mix(counters)[None, :]
+        z *= _GOLDEN
+        _mix(z)
+    return z.reshape(-1)

@@ -20,6 +20,8 @@ from prsc.errors import PrscError
 from prsc.ir.program import Program
 from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchedSampler, batch_plan
+from prsc.sampling.candidate_plan import candidate_plan
+from prsc.sampling.candidates import CandidateSampler, Drawn
 from prsc.sampling.gibbs import DEFAULT_SWEEPS
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
 from prsc.sampling.proposal import Proposal
@@ -102,6 +104,23 @@ class Sampler:
                 self._quaternions = [quaternion_wxyz(o.rotation) for o in self._batch.plan.objects]
             except Unbatchable as reason:
                 self.unbatched_because = str(reason)
+        # The joint law of a spec that does not batch: whole-scene rejection vectorised over
+        # candidates (candidates.py), Gibbs sweeps for the scenes where no candidate passes.
+        self._candidates: CandidateSampler | None = None
+        self.no_candidates_because = "" if self._batch is not None else "not the joint law of the exact sampler"
+        if self._batch is None and batched and isinstance(self._engine, SequentialSampler) and sampler == "exact" \
+                and law == "joint" and proposal is None:
+            try:
+                runtimes = self._engine.runtimes
+                self._candidates = CandidateSampler(candidate_plan(self.constraints, runtimes), self.constraints, runtimes)
+                self.no_candidates_because = ""
+            except Unbatchable as reason:
+                self.no_candidates_because = str(reason)
+
+    @property
+    def candidates(self) -> bool:
+        """Whether the joint law is drawn by candidate rounds first (`no_candidates_because` says why not)."""
+        return self._candidates is not None
 
     @property
     def batched(self) -> bool:
@@ -117,21 +136,33 @@ class Sampler:
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
         if self._batch is None:
-            return self._engine.sample(seed, index)
+            return self.results(seed, [index])[0]
         state = self._batch.draw(seed, [index])
         objects, ctx = self._batch.objects(state, 0, self._engine.runtimes)  # type: ignore[union-attr]
         return SceneResult(objects, self._batch.params(state)[0], RejectionStats(scenes=1), ctx)
+
+    def results(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
+        """Scenes `indices` under `seed` with their statistics (an unbatched spec; candidate rounds at once)."""
+        if self._candidates is None:
+            return [self._engine.sample(seed, index) for index in indices]
+        return [self._settle(drawn, seed, index) for drawn, index in zip(self._candidates.draw(seed, indices), indices)]
+
+    def _settle(self, drawn: Drawn, seed: int, index: int) -> SceneResult:
+        """A candidate round's scene: itself, its error raised, or (no candidate passed) the Gibbs sampler's."""
+        if isinstance(drawn, PrscError):
+            raise drawn
+        return self._engine.sample(seed, index) if drawn is None else drawn
 
     def scene(self, seed: int, index: int) -> dict[str, Any]:
         """Scene `index` under `seed` as scene JSON (docs/scene-json.md)."""
         if self._batch is not None:
             return self.batch(seed, [index])[0]
-        return self.to_json(self._engine.sample(seed, index), seed, index)
+        return self.to_json(self.sample(seed, index), seed, index)
 
     def batch(self, seed: int, indices: Sequence[int]) -> list[dict[str, Any]]:
         """Scenes `indices` under `seed` as scene JSON, drawn at once when the spec is batched."""
         if self._batch is None:
-            return [self.scene(seed, index) for index in indices]
+            return [self.to_json(result, seed, index) for result, index in zip(self.results(seed, indices), indices)]
         state = self._batch.draw(seed, indices)
         names = [o.name for o in self._batch.plan.objects]
         positions = [state.positions[name].tolist() for name in names]
@@ -152,15 +183,19 @@ class Sampler:
     def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
         """index -> scene JSON under `seed`; a batched spec draws the next `ahead` indices at once and
         hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once."""
-        drawn: dict[int, dict[str, Any]] = {}
+        drawn: dict[int, Any] = {}  # index -> scene JSON (batched) or a candidate round's Drawn
 
         def scene(index: int) -> dict[str, Any]:
-            if self._batch is None:
+            if self._batch is None and self._candidates is None:
                 return self.scene(seed, index)
             if index not in drawn:
                 drawn.clear()
-                drawn.update(zip(range(index, index + ahead), self.batch(seed, range(index, index + ahead))))
-            return drawn.pop(index)
+                chunk = range(index, index + ahead)
+                # Candidate rounds hand over results, each made JSON (or its error raised) only when asked for:
+                # a scene that cannot be written does not take the scenes before it in the chunk with it.
+                drawn.update(zip(chunk, self.batch(seed, chunk) if self._batch is not None else self._candidates.draw(seed, chunk)))
+            value = drawn.pop(index)
+            return value if self._batch is not None else self.to_json(self._settle(value, seed, index), seed, index)
 
         return scene
 
@@ -178,7 +213,7 @@ class Sampler:
     def scenes(self, seed: int, indices: Iterable[int] | int, start: int = 0) -> Iterator[dict[str, Any]]:
         """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily, in batches."""
         chosen = range(start, start + indices) if isinstance(indices, int) else indices
-        if self._batch is None:
+        if self._batch is None and self._candidates is None:
             for index in chosen:
                 yield self.scene(seed, index)
             return

@@ -349,10 +349,11 @@ def test_bad_options(tmp_path, capsys):
 def test_an_error_in_a_worker_keeps_its_location(tmp_path, capsys):
     """--jobs 2: a scene that cannot be sampled is reported with its notes, as with one job."""
     spec = tmp_path / "flaky.prs"
-    spec.write_text("x = (0, 1)\nt = Object at Vector3D(0, 0, 1)\nrequire x > 0.9\n")  # fails 12% of scenes
+    # Candidate rounds find x > 0.999 in 32 % of scenes; the Gibbs sampler fails most of the others.
+    spec.write_text("x = (0, 1)\nt = Object at Vector3D(0, 0, 1)\nrequire x > 0.999\n")
     assert main(["compile", str(spec), "-n", "40", "--jobs", "2", "-o", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert "could not sample scene" in err and f"{spec}:3:1: note: this require: require x > 0.9" in err
+    assert "could not sample scene" in err and f"{spec}:3:1: note: this require: require x > 0.999" in err
 
 
 def test_a_body_too_light_for_mujoco_is_a_clear_error(tmp_path, capsys):

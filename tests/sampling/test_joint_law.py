@@ -111,3 +111,11 @@ def test_compile_keeps_the_law_in_the_folder_digest(tmp_path, capsys):
     assert main(["compile", spec, "--target", "json", "-n", "2", "-o", out, "--law", "sequential"]) == 2
     assert "--force" in capsys.readouterr().err
     assert main(["compile", spec, "--target", "json", "-n", "2", "-o", out, "--law", "sequential", "--force"]) == 0
+
+
+def test_the_default_law_is_tested_on_both_of_its_samplers():
+    """The tray's default law is drawn by candidate rounds and the cups' by Gibbs sweeps, so the
+    KS tests above check both (docs/sampling.md, "Candidate rounds")."""
+    assert compile_sampler(DATA / "tray_four_cubes.prs").candidates
+    cups = compile_sampler(DATA / "aligned_cups.prs")
+    assert not cups.candidates and not cups.batched

@@ -1,0 +1,272 @@
+"""The candidate plan: how the candidate sampler (candidates.py) draws each object of a spec
+and what it tests, decided once per spec; Unbatchable when some object's region or test
+is not one it vectorises (the spec's joint law is then drawn by Gibbs sweeps only).
+
+As the rejection reference (`--law rejection`, engine.py's joint mode) each object is drawn
+uniformly on its whole region given the objects before it, with its own size and yaw
+drawn first, and the scene is tested for collisions and rejection-checked requires. The
+regions vectorised here:
+- **fixed**: the same in every candidate (every rule static), drawn by its exact sampler;
+- **carried**: one region translated with an earlier object (a camera above the bin), when
+  the static rows provably never cut it (the batched sampler's proof, batched.py);
+- **rectangle**: `[completely] on`/`in` an earlier object of fixed size (its top face or its
+  container floor): a rectangle in that object's frame, shrunk by the footprint's support
+  along its sides when `completely`, when the workspace provably holds it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from prsc.constraints.model import ConstraintProgram, Rule
+from prsc.constraints.specifiers import interior_of
+from prsc.constraints.values import DIMENSIONS, ObjectValue
+from prsc.errors import PrscError
+from prsc.geometry.container import Interior
+from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.obb import CONTACT_TOL
+from prsc.geometry.sampler import UniformSampler
+from prsc.ir import model as ir
+from prsc.sampling.batch_values import BatchValue, Unbatchable, _const
+from prsc.sampling.batched import rows_hold
+from prsc.sampling.candidate_rules import Test, constant_region
+from prsc.sampling.candidate_values import CandidateCompiler
+from prsc.sampling.prepared import TOL
+from prsc.sampling.runtime import ObjectRuntime
+
+_RECTANGLE = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # Interior.edges' normals of a box
+
+
+@dataclass(frozen=True, eq=False)
+class Region:
+    """Where a candidate's centre is drawn: its whole region given the objects before it."""
+
+    kind: str  # fixed | carried | rectangle
+    sampler: UniformSampler | None = None  # fixed, carried (about the anchor)
+    point: np.ndarray | None = None  # fixed: a single point
+    anchor: str | None = None  # carried, rectangle: the object it moves with
+    interior: Interior | None = None  # rectangle: the container floor (None: the top face)
+    half_size: tuple[float, float] = (0.0, 0.0)  # rectangle: the face's or floor's half width and length
+    completely: bool = False  # rectangle: shrunk by the footprint
+
+    @property
+    def uniforms(self) -> int:
+        """Uniforms one draw reads."""
+        return 2 if self.sampler is None else self.sampler.dim + 1
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateObject:
+    """One object of a candidate round: how its size, yaw and centre are drawn, what it must not hit."""
+
+    name: str
+    sizes: tuple[BatchValue, BatchValue, BatchValue]
+    yaw: BatchValue | None
+    rotation: np.ndarray  # when yaw is None
+    region: Region
+    obstacles: tuple[str, ...]  # earlier objects its box must not collide with
+
+
+@dataclass(frozen=True, eq=False)
+class CandidatePlan:
+    """A spec's objects as candidate rounds draw them, and the scene's tests."""
+
+    objects: tuple[CandidateObject, ...]
+    requires: tuple[tuple[int, Test], ...]  # (object index after which it is tested, -1: first), test
+    soft: np.ndarray  # the soft requires' probabilities
+
+
+@dataclass(frozen=True)
+class _Placed:
+    """What the plan knows of the objects before the one being planned."""
+
+    runtimes: dict[str, ObjectRuntime]
+    bounds: dict[str, tuple[np.ndarray, np.ndarray]]  # bounds of the centre in every candidate
+    reaches: dict[str, float]  # bound of the box's half diagonal
+
+
+def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) -> CandidatePlan:
+    """The candidate plan of a lowered spec; Unbatchable says why its joint law needs Gibbs sweeps."""
+    program = cprog.program
+    decls = {o.name: o for o in program.objects}
+    placed = _Placed({}, {}, {})
+    compiler_bounds: dict[str, tuple[np.ndarray, np.ndarray, Any]] = {}
+    compiler = CandidateCompiler(program, compiler_bounds)
+    conditions = {label: req.condition for label, req in zip((c.label_id for _, c in cprog.require_tests), program.requires)}
+    requires: list[tuple[int, Test]] = []
+    for check in cprog.scene_checks:
+        requires.append((-1, _require_test(compiler, conditions[check.label_id], check.soft)))
+    objects: list[CandidateObject] = []
+    for index, rt in enumerate(runtimes):
+        plan = rt.plan
+        name = plan.name
+        if plan.exclusions:
+            raise Unbatchable(f"{name} has excluded cells (`not visible from`, `reachable by`)")
+        if rt.after_position:
+            raise Unbatchable(f"{name}'s rotation depends on its position")
+        if rt.allow_static is None:
+            raise Unbatchable(f"{name}'s allowCollisions changes between scenes")
+        if any(rule.soft is not None for rule in plan.rules):
+            raise Unbatchable(f"{name}'s region has a soft require")
+        sizes = _sizes(rt, decls[name], compiler)
+        yaw, rotation = _rotation(rt, compiler)
+        reach = 0.5 * float(np.linalg.norm([s.hi[0] for s in sizes]))
+        region, lo, hi = _region(rt, placed, reach)
+        placed.bounds[name], placed.reaches[name], placed.runtimes[name] = (lo, hi), reach, rt
+        compiler_bounds[name] = (lo, hi, None)
+        obstacles = () if rt.allow_static else tuple(
+            other.name for j, other in enumerate(objects)
+            if not runtimes[j].allow_static and j not in plan.rests_in and not _apart(placed, name, other.name)
+        )
+        objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles))
+        requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
+    soft = np.array([s.probability for s in cprog.soft_requires], dtype=float)
+    return CandidatePlan(tuple(objects), tuple(requires), soft)
+
+
+def _sizes(rt: ObjectRuntime, decl: Any, compiler: CandidateCompiler) -> tuple[BatchValue, BatchValue, BatchValue]:
+    """Width, length and height as candidate values (registered for `self.width` and later reads)."""
+    name = rt.plan.name
+    own: dict[str, BatchValue] = {}
+    compiler.sizes[name] = own
+    for i, prop in enumerate(DIMENSIONS):
+        if rt.dims is not None:
+            own[prop] = _const(rt.dims[i])
+            continue
+        expr = decl.prop(prop)
+        if expr is None:
+            raise Unbatchable(f"{name}'s {prop} is not a property")
+        value = compiler.compile(expr)
+        if value.vector or not value.lo[0] >= 0.0:
+            raise Unbatchable(f"{name}'s {prop} may be negative")  # the scalar sampler explains it
+        own[prop] = value
+    return own["width"], own["length"], own["height"]
+
+
+def _rotation(rt: ObjectRuntime, compiler: CandidateCompiler) -> tuple[BatchValue | None, np.ndarray]:
+    if rt.rotation is not None:
+        return None, rt.rotation
+    rule = rt.plan.orientation
+    assert rule is not None
+    if rule.kind != "facing":
+        raise Unbatchable(f"{rt.plan.name}'s `{rule.kind}` changes between scenes")
+    value = compiler.compile(rule.arg)
+    if value.vector:
+        raise Unbatchable(f"{rt.plan.name} faces a direction that changes between scenes")
+    return value, np.eye(3)
+
+
+def _region(rt: ObjectRuntime, placed: _Placed, reach: float) -> tuple[Region, np.ndarray, np.ndarray]:
+    """The object's region as candidates draw it, and bounds of its centre in every candidate."""
+    provider, name = rt.provider, rt.plan.name
+    try:
+        if provider.mode == "static":
+            provider.fixed_bounds()
+            prepared = provider.static_prepared
+            if prepared is None:
+                raise Unbatchable(f"{name}'s region is empty or unbounded")
+            return Region("fixed", prepared.sampler, prepared.point), prepared.lo, prepared.hi
+        if provider.mode == "anchored" and rt.support is not None:
+            return _carried(rt, placed)
+    except (EmptyRegionError, UnboundedRegionError):
+        raise Unbatchable(f"{name}'s region is empty or unbounded") from None
+    return _rectangle(rt, placed, reach)
+
+
+def _carried(rt: ObjectRuntime, placed: _Placed) -> tuple[Region, np.ndarray, np.ndarray]:
+    """A region translated with an earlier object, which the static rows never cut (batched._anchored)."""
+    provider, name = rt.provider, rt.plan.name
+    anchor = provider.plan.anchor
+    provider.fixed_bounds()
+    prepared = provider.anchored_prepared
+    if prepared is None or prepared.sampler is None or anchor not in placed.bounds:
+        raise Unbatchable(f"{name}'s region carried by {anchor} may be cut, or is a point")
+    own = np.unique(prepared.sampler.vertices(), axis=0)
+    lo_a, hi_a = placed.bounds[anchor]
+    anchors = _corners(lo_a, hi_a)
+    carried = (anchors[:, None, :] + own[None, :, :]).reshape(-1, 3)
+    static = provider.static_rows
+    if static is not None and (len(static.d) or not rows_hold(static, carried, 2 * TOL)):
+        raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
+    return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
+
+
+def _rectangle(rt: ObjectRuntime, placed: _Placed, reach: float) -> tuple[Region, np.ndarray, np.ndarray]:
+    """`[completely] on`/`in` an earlier object of fixed size, inside the workspace."""
+    name = rt.plan.name
+    surfaces = [r for r in rt.plan.rules if r.kind == "on"]
+    others = [r for r in rt.plan.rules if r.kind not in ("on", "workspace")]
+    if len(surfaces) != 1 or others:
+        kinds = sorted({r.kind for r in rt.plan.rules})
+        raise Unbatchable(f"{name}'s region ({', '.join(kinds)}) changes shape between scenes")
+    rule = surfaces[0]
+    target = rule.args[0]
+    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
+        raise Unbatchable(f"{name} rests on something other than an object placed before it")
+    carrier = placed.runtimes[target.name]
+    if carrier.dims is None:
+        raise Unbatchable(f"{name} rests on {target.name}, whose size changes between scenes")
+    interior = _interior(carrier, rule)
+    if interior is not None:
+        normals, offsets = interior.edges()
+        if normals.shape != _RECTANGLE.shape or not np.array_equal(normals, _RECTANGLE) or offsets[0] != offsets[1] \
+                or offsets[2] != offsets[3]:
+            raise Unbatchable(f"{name} rests in a container whose floor is not a centred rectangle")
+        half = (float(offsets[0]), float(offsets[2]))
+    else:
+        half = (carrier.dims[0] / 2, carrier.dims[1] / 2)
+    completely = bool(rule.option("completely"))
+    lift = interior.floor_top if interior is not None else carrier.dims[2] / 2
+    # The object's box lies in this prism on the face, in the carrier's frame (beyond its sides
+    # by up to its reach unless `completely`); the centre in the same prism.
+    over = 0.0 if completely else reach
+    prism = _corners(np.array([-half[0] - over, -half[1] - over, lift]), np.array([half[0] + over, half[1] + over, lift + 2 * reach]))
+    lo_c, hi_c = placed.bounds[target.name]
+    if carrier.rotation is not None:
+        offsets = prism @ carrier.rotation.T
+        lo, hi = lo_c + offsets.min(axis=0), hi_c + offsets.max(axis=0)
+    else:
+        radius = float(np.linalg.norm(prism, axis=1).max())
+        lo, hi = lo_c - radius, hi_c + radius
+    for workspace in (r for r in rt.plan.rules if r.kind == "workspace"):
+        if not rows_hold(constant_region(workspace), _corners(lo, hi)):
+            raise Unbatchable(f"{name}'s region may be cut by the workspace")
+    return Region("rectangle", anchor=target.name, interior=interior, half_size=half,
+                  completely=completely), lo, hi
+
+
+def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:
+    """The container floor `on`/`in` the carrier means (specifiers.rows_on), or None: its top face."""
+    plan = carrier.plan
+    value = ObjectValue(plan.name, plan.class_name, plan.span, None, None, carrier.dims, dict(plan.static_props), plan.property_fns)
+    try:
+        interior = interior_of(value, plan.span, bool(rule.option("inside_asset")) or bool(rule.option("inside")))
+    except PrscError:
+        raise Unbatchable(f"{plan.name}'s interior is not a constant") from None
+    if rule.option("inside") and interior is None:
+        raise Unbatchable(f"`in {plan.name}`, which is no container")  # the scalar sampler explains it
+    return interior
+
+
+def _require_test(compiler: CandidateCompiler, condition: ir.Expr, soft: int | None) -> Test:
+    value = compiler.compile(condition)
+    if value.vector:
+        raise Unbatchable("a require on a vector")
+    fn = value.fn
+    if soft is None:
+        return lambda state: np.broadcast_to(fn(state)[:, 0] != 0.0, (len(state.keys),))
+    return lambda state: (fn(state)[:, 0] != 0.0) | ~state.active[:, soft]  # type: ignore[index]
+
+
+def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)], dtype=float)
+
+
+def _apart(placed: _Placed, a: str, b: str) -> bool:
+    """Whether two objects' boxes are apart in every candidate (their centres' bounds and sizes)."""
+    (lo_a, hi_a), (lo_b, hi_b) = placed.bounds[a], placed.bounds[b]
+    gap = placed.reaches[a] + placed.reaches[b] - CONTACT_TOL
+    return bool(np.any(hi_a + gap <= lo_b) or np.any(hi_b + gap <= lo_a))

@@ -1,0 +1,33 @@
+"""What the candidate sampler (candidates.py) computes per candidate besides values: a box's
+support function over many candidates, and the fixed regions a rule may read."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from prsc.constraints.context import SceneContext
+from prsc.constraints.model import Rule
+from prsc.constraints.values import RegionValue
+from prsc.geometry.polytope import Polytope
+from prsc.sampling.batch_values import Unbatchable
+from prsc.sampling.candidate_values import CandidateState
+
+Test = Callable[[CandidateState], np.ndarray]  # (n,) bool: the candidates that pass
+
+
+def support(normals: np.ndarray, rotation: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """s(n) of each candidate's box along its own normals: normals (n, m, 3), rotation (n, 3, 3), half (n, 3) -> (n, m)."""
+    return np.einsum("nmj,nj->nm", np.abs(np.einsum("nmi,nij->nmj", normals, rotation)), half)
+
+
+def constant_region(rule: Rule) -> Polytope:
+    """The fixed region a workspace rule reads (Unbatchable unless it is the same in every scene)."""
+    try:
+        value = rule.values[0](SceneContext(None))  # type: ignore[arg-type]  # a constant reads no stream
+    except Exception:  # noqa: BLE001 - any failure means the region is not a constant
+        raise Unbatchable("a region that changes between scenes") from None
+    if not isinstance(value, RegionValue) or len(value.poly.d):
+        raise Unbatchable("a workspace that is not a solid region")
+    return value.poly

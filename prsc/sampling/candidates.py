@@ -1,0 +1,185 @@
+"""The joint law by whole-scene rejection, vectorised over candidate scenes
+(docs/sampling.md, "Candidate rounds").
+
+The rejection reference (rejection.py) draws a whole scene from the base regions and
+keeps it when every rule, collision test and require holds; its law is the spec's joint
+law. Here each scene draws its candidates in rounds of `PER_ROUND`, all in numpy at once:
+every object's size, yaw and centre, then every test, over arrays with one row per
+candidate (candidate_plan.py decides how, once per spec). A scene keeps its first
+candidate that passes, in candidate order. Candidate c of scene k under seed s reads the
+counter stream at (s, k, c) alone, so a scene is the same whatever other scenes share its
+batch, whatever -n, --jobs or Ray.
+
+When no candidate of `ROUNDS * PER_ROUND` passes (a packed spec, such as ten cubes in a
+tray), the scene is drawn by the Gibbs sampler instead, from its own Generator. Either
+way the scene follows the joint law: the first passing candidate is a draw of it, and
+whether any passes depends on the scene's stream alone, so the mixture of the two is the
+joint law too (as far as the Gibbs sweeps have mixed: docs/sampling.md).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence, Union
+
+import numpy as np
+
+from prsc.constraints.context import SceneContext
+from prsc.constraints.model import ConstraintProgram
+from prsc.constraints.values import DIMENSIONS, ObjectValue
+from prsc.errors import PrscError
+from prsc.geometry.obb import CONTACT_TOL, pair_overlaps
+from prsc.sampling.candidate_plan import CandidateObject, CandidatePlan, Region
+from prsc.sampling.candidate_rules import support
+from prsc.sampling.candidate_values import CandidateState
+from prsc.sampling.counter_stream import candidate_keys, scene_keys, uniforms
+from prsc.sampling.engine import SceneResult
+from prsc.sampling.runtime import ObjectRuntime, evaluate_params
+from prsc.sampling.seeds import scene_rng
+from prsc.sampling.stats import RejectionStats
+
+PER_ROUND = 64  # candidates per scene and round
+ROUNDS = 6  # rounds before a scene is left to the Gibbs sampler
+CHUNK = 64  # scenes evaluated together: memory grows with CHUNK * PER_ROUND rows, not with n
+Drawn = Union[SceneResult, PrscError, None]  # a scene, the error of its properties, or None: no candidate passed
+REJECTED = "candidate"  # the rejection statistics' cause for candidates that failed a test
+
+
+class CandidateSampler:
+    """Draws scenes of a candidate plan: the first passing candidate of each, or None for Gibbs."""
+
+    def __init__(self, plan: CandidatePlan, cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) -> None:
+        self.plan = plan
+        self.cprog = cprog
+        self.runtimes = runtimes
+        self._soft_site = 4 * len(plan.objects)  # even sites 4k are the objects' centres, odd ones the draws'
+        self._after: dict[int, list] = {}
+        for last, test in plan.requires:
+            self._after.setdefault(last, []).append(test)
+
+    def draw(self, seed: int, indices: Sequence[int]) -> list[Drawn]:
+        """Scenes `indices` of `seed`; None where no candidate passed (draw that scene by Gibbs sweeps),
+        the error where the passing candidate's properties are not valid (raise it for that scene only)."""
+        out: list[Drawn] = []
+        for first in range(0, len(indices), CHUNK):
+            out += self._chunk(seed, list(indices[first:first + CHUNK]))
+        return out
+
+    def _chunk(self, seed: int, indices: list[int]) -> list[Drawn]:
+        keys = scene_keys(seed, np.asarray(indices, dtype=np.uint64))
+        results: list[Drawn] = [None] * len(indices)
+        pending = np.arange(len(indices))
+        for round_ in range(ROUNDS):
+            if not len(pending):
+                break
+            state, ok = self.evaluate(candidate_keys(keys[pending], round_ * PER_ROUND, PER_ROUND))
+            ok = ok.reshape(len(pending), PER_ROUND)
+            passed = ok.any(axis=1)
+            rows = np.flatnonzero(passed) * PER_ROUND + ok.argmax(axis=1)[passed]
+            for scene, row, tried in zip(pending[passed], rows, ok.argmax(axis=1)[passed]):
+                try:
+                    results[scene] = self._result(state, int(row), seed, indices[scene], round_ * PER_ROUND + int(tried))
+                except PrscError as error:  # a property this scene cannot have: reported when the scene is asked for
+                    results[scene] = error
+            pending = pending[~passed]
+        return results
+
+    def evaluate(self, keys: np.ndarray) -> tuple[CandidateState, np.ndarray]:
+        """Every candidate of `keys` drawn and tested: (its state, which passed)."""
+        state = CandidateState(keys)
+        n = len(keys)
+        ok = np.ones(n, dtype=bool)
+        if len(self.plan.soft):
+            state.active = uniforms(keys, self._soft_site, len(self.plan.soft)) < self.plan.soft
+        for test in self._after.get(-1, ()):
+            ok &= test(state)
+        for k, item in enumerate(self.plan.objects):
+            state.dims[item.name] = np.concatenate([np.broadcast_to(s.fn(state), (n, 1)) for s in item.sizes], axis=1)
+            state.rotations[item.name] = _rotations(item, state, n)
+            position, valid = _draw(item.region, item.name, state, uniforms(keys, 4 * k, item.region.uniforms))
+            state.positions[item.name] = position
+            ok &= valid
+            # The box's axis-aligned half extents, for the broad phase of later pairs too.
+            state.reaches[item.name] = np.einsum("nij,nj->ni", np.abs(state.rotations[item.name]), state.dims[item.name] * 0.5)
+            for other in item.obstacles:
+                ok &= ~_collide(state, item.name, other, ok)
+            for test in self._after.get(k, ()):
+                ok &= test(state)
+        return state, ok
+
+    def _result(self, state: CandidateState, row: int, seed: int, index: int, rejected: int) -> SceneResult:
+        """The scene of one passing candidate, as the sequential sampler returns it (draws memoised;
+        properties no test read are drawn from the scene's own Generator)."""
+        ctx = SceneContext(scene_rng(seed, index))
+        for draw_id, values in state.draws.items():
+            ctx.draws[draw_id] = float(values[row if len(values) > 1 else 0, 0])
+        objects = []
+        for rt in self.runtimes:
+            plan = rt.plan
+            dims = tuple(float(v) for v in state.dims[plan.name][row])
+            props = dict(plan.static_props)
+            props.update(zip(DIMENSIONS, dims))
+            obj = ObjectValue(plan.name, plan.class_name, plan.span, np.array(state.positions[plan.name][row]),
+                              np.array(state.rotations[plan.name][row]), dims, props, plan.property_fns)
+            ctx.objects[plan.name] = obj
+            objects.append(obj)
+        ctx.level = len(objects)
+        for rt, obj in zip(self.runtimes, objects):
+            rt.finish(obj, ctx)
+        if len(self.plan.soft):
+            assert state.active is not None
+            ctx.active_requires = frozenset(int(i) for i in np.flatnonzero(state.active[row]))
+        stats = RejectionStats(scenes=1)
+        if rejected:
+            stats.add(REJECTED, rejected)
+        return SceneResult(objects, evaluate_params(self.cprog, ctx), stats, ctx)
+
+
+def _rotations(item: CandidateObject, state: CandidateState, n: int) -> np.ndarray:
+    if item.yaw is None:
+        return np.broadcast_to(item.rotation, (n, 3, 3))
+    yaw = np.broadcast_to(item.yaw.fn(state), (n, 1))[:, 0]
+    c, s = np.cos(yaw), np.sin(yaw)
+    out = np.zeros((n, 3, 3))
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1], out[:, 2, 2] = c, -s, s, c, 1.0
+    return out
+
+
+def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate centres uniform on their regions, and which regions are not empty."""
+    n = len(u)
+    valid = np.ones(n, dtype=bool)
+    if region.kind == "fixed":
+        if region.point is not None:
+            return np.broadcast_to(region.point, (n, 3)), valid
+        assert region.sampler is not None
+        return region.sampler.points(u), valid
+    assert region.anchor is not None
+    if region.kind == "carried":
+        assert region.sampler is not None
+        return region.sampler.points(u) + state.positions[region.anchor], valid
+    # A rectangle on the carrier's face or floor, in its frame (specifiers.rows_on's rows).
+    pos, rot = state.positions[region.anchor], state.rotations[region.anchor]
+    s = support(np.swapaxes(rot, 1, 2), state.rotations[name], state.dims[name] * 0.5)  # along its x, y, up
+    hx, hy = np.full(n, region.half_size[0]), np.full(n, region.half_size[1])
+    if region.completely:
+        hx, hy = hx - s[:, 0], hy - s[:, 1]
+        valid = (hx >= 0.0) & (hy >= 0.0)  # the footprint does not fit: an empty region, never drawn
+    x, y = (2.0 * u[:, 0] - 1.0) * hx, (2.0 * u[:, 1] - 1.0) * hy
+    lift = s[:, 2] + (region.interior.floor_top if region.interior is not None else state.dims[region.anchor][:, 2] * 0.5)
+    return pos + x[:, None] * rot[:, :, 0] + y[:, None] * rot[:, :, 1] + lift[:, None] * rot[:, :, 2], valid
+
+
+def _collide(state: CandidateState, a: str, b: str, alive: np.ndarray) -> np.ndarray:
+    """Which live candidates' boxes of a and b collide (collisions.first_hit's test: broad phase, then SAT)."""
+    pa, pb = state.positions[a], state.positions[b]
+    reach = state.reaches[a] + state.reaches[b] - CONTACT_TOL
+    close = np.flatnonzero(alive & np.all(np.abs(pa - pb) < reach, axis=1))
+    hit = np.zeros(len(pa), dtype=bool)
+    if len(close):
+        ra, ha = state.rotations[a][close], state.dims[a][close] * 0.5
+        rb, hb = state.rotations[b][close], state.dims[b][close] * 0.5
+        hit[close] = pair_overlaps(pa[close], ra, ha, pb[close], rb, hb) > CONTACT_TOL
+    return hit
+
+
+__all__ = ["CandidateSampler", "CHUNK", "PER_ROUND", "ROUNDS"]

@@ -1,0 +1,86 @@
+"""Candidate rounds (prsc/sampling/candidates.py): the joint law by whole-scene rejection,
+vectorised over candidate scenes, with Gibbs sweeps where no candidate passes.
+
+Their law is tested with the other joint-law samplers against the stored rejection
+reference (test_joint_law.py: the tray of four cubes is drawn by candidate rounds). Here:
+which specs they draw, that scene k is the same alone or in any chunk, and the geometry.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from prsc.geometry.obb import pair_overlaps, projection_overlaps
+from prsc.geometry.rotations import quat_to_matrix
+from prsc.sampling import compile_sampler
+from prsc.sampling.candidates import REJECTED
+
+REPO = Path(__file__).resolve().parents[2]
+BIN = REPO / "specs" / "bin_picking.prs"
+TRAY = REPO / "tests" / "sampling" / "data" / "tray_four_cubes.prs"
+
+
+def test_which_specs_candidate_rounds_draw():
+    """Random sizes and yaws in a container and on a tray are drawn by candidates; a facing-toward is not."""
+    assert compile_sampler(BIN).candidates
+    assert compile_sampler(TRAY).candidates
+    toward = compile_sampler(REPO / "specs" / "facing_toward.prs")
+    assert not toward.candidates and "depends on its position" in toward.no_candidates_because
+    assert not compile_sampler(BIN, law="sequential").candidates  # only the joint law
+    assert not compile_sampler(BIN, batched=False).candidates  # one scene at a time: Gibbs sweeps
+
+
+@pytest.mark.parametrize("spec", [BIN, TRAY])
+def test_scene_k_is_the_same_alone_or_in_any_chunk(spec):
+    sampler = compile_sampler(spec)
+    together = sampler.batch(3, range(0, 70))  # more than one chunk of scenes
+    alone = [sampler.scene(3, k) for k in (0, 41, 69)]
+    shifted = sampler.batch(3, range(41, 45))
+    assert [together[k] for k in (0, 41, 69)] == alone
+    assert together[41:45] == shifted
+    assert together[0] != together[1]
+
+
+def test_candidate_scenes_hold_the_spec():
+    """Every part lies inside the bin's walls, on its floor, and no two boxes overlap."""
+    sampler = compile_sampler(BIN)
+    results = sampler.results(0, range(64))
+    assert sum(r.stats.counts.get(REJECTED, 0) for r in results) > 64  # candidates were rejected, not all drawn first
+    for result in results:
+        objects = {o.name: o for o in result.objects}
+        bin_ = objects["bin_1"]
+        inner = np.array(bin_.dims[:2]) / 2 - bin_.props["wallThickness"]
+        parts = [o for name, o in objects.items() if name.startswith(("part_", "can_"))]
+        for part in parts:
+            corners = np.abs(part.rotation[:2, :2]) @ (np.array(part.dims[:2]) / 2)
+            assert np.all(np.abs(part.position[:2] - bin_.position[:2]) + corners <= inner + 1e-9)
+            floor = bin_.position[2] - bin_.dims[2] / 2 + bin_.props["floorThickness"]
+            assert part.position[2] - part.dims[2] / 2 == pytest.approx(floor)
+        for i, a in enumerate(parts):
+            for b in parts[:i]:
+                overlap = pair_overlaps(a.position[None], a.rotation[None], np.array(a.dims)[None] / 2,
+                                        b.position[None], b.rotation[None], np.array(b.dims)[None] / 2)
+                assert overlap[0] <= 1e-6
+
+
+def test_a_packed_spec_falls_back_to_gibbs_sweeps_with_the_same_scenes():
+    """Ten cubes in a tray: no candidate passes, so the scene is the Gibbs sampler's, alone or not."""
+    sampler = compile_sampler(REPO / "specs" / "ten_cubes_tray.prs")
+    assert sampler.candidates
+    gibbs = compile_sampler(REPO / "specs" / "ten_cubes_tray.prs", batched=False)
+    assert sampler.batch(0, [5, 6]) == [gibbs.scene(0, 5), gibbs.scene(0, 6)]
+
+
+def test_pair_overlaps_is_the_sat_of_each_pair():
+    rng = np.random.default_rng(0)
+    n = 300
+    ca, cb = rng.normal(size=(n, 3)) * 0.3, rng.normal(size=(n, 3)) * 0.3
+    ra, rb = quat_to_matrix(rng.normal(size=(n, 4))), quat_to_matrix(rng.normal(size=(n, 4)))
+    ha, hb = rng.uniform(0.05, 0.3, (n, 3)), rng.uniform(0.05, 0.3, (n, 3))
+    got = pair_overlaps(ca, ra, ha, cb, rb, hb)
+    want = [projection_overlaps(ca[i], ra[i], ha[i], cb[i:i + 1], rb[i:i + 1], hb[i:i + 1]).min() for i in range(n)]
+    assert np.allclose(got, want, atol=1e-12)
+    assert 0.1 < np.mean(got > 0) < 0.9  # both colliding and separated pairs
