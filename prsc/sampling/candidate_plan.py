@@ -16,8 +16,8 @@ regions vectorised here:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Sequence
+from dataclasses import dataclass, fields
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -32,11 +32,14 @@ from prsc.geometry.sampler import UniformSampler
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable, _const
 from prsc.sampling.batched import rows_hold
-from prsc.sampling.candidate_rules import Test, constant_region
-from prsc.sampling.candidate_values import CandidateCompiler
+from prsc.constraints.specifiers import DIRECTION_AXES
+from prsc.sampling.candidate_rules import Test, constant_region, support
+from prsc.sampling.candidate_values import CandidateCompiler, CandidateState
 from prsc.sampling.prepared import TOL
 from prsc.sampling.runtime import ObjectRuntime
 
+# Rows a.p <= b of each candidate on its own centre: (a (n, m, 3), b (n, m)).
+Cut = Callable[[CandidateState], tuple[np.ndarray, np.ndarray]]
 _RECTANGLE = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # Interior.edges' normals of a box
 
 
@@ -44,18 +47,21 @@ _RECTANGLE = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # Int
 class Region:
     """Where a candidate's centre is drawn: its whole region given the objects before it."""
 
-    kind: str  # fixed | carried | rectangle
+    kind: str  # fixed | carried | rectangle (cut by `cuts`: a convex polygon)
     sampler: UniformSampler | None = None  # fixed, carried (about the anchor)
     point: np.ndarray | None = None  # fixed: a single point
     anchor: str | None = None  # carried, rectangle: the object it moves with
     interior: Interior | None = None  # rectangle: the container floor (None: the top face)
     half_size: tuple[float, float] = (0.0, 0.0)  # rectangle: the face's or floor's half width and length
     completely: bool = False  # rectangle: shrunk by the footprint
+    cuts: tuple[Cut, ...] = ()  # rectangle: further rows a.p <= b per candidate (`left of tray`, ...)
 
     @property
     def uniforms(self) -> int:
         """Uniforms one draw reads."""
-        return 2 if self.sampler is None else self.sampler.dim + 1
+        if self.sampler is not None:
+            return self.sampler.dim + 1
+        return 3 if self.cuts else 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,12 +115,12 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
             raise Unbatchable(f"{name}'s rotation depends on its position")
         if rt.allow_static is None:
             raise Unbatchable(f"{name}'s allowCollisions changes between scenes")
-        if any(rule.soft is not None for rule in plan.rules):
-            raise Unbatchable(f"{name}'s region has a soft require")
+        if any(rule.soft is not None for rule in plan.rules if rule.kind != "require"):
+            raise Unbatchable(f"{name}'s region has a soft rule")
         sizes = _sizes(rt, decls[name], compiler)
         yaw, rotation = _rotation(rt, compiler)
         reach = 0.5 * float(np.linalg.norm([s.hi[0] for s in sizes]))
-        region, lo, hi = _region(rt, placed, reach)
+        region, lo, hi = _region(rt, placed, reach, compiler)
         placed.bounds[name], placed.reaches[name], placed.runtimes[name] = (lo, hi), reach, rt
         compiler_bounds[name] = (lo, hi, None)
         obstacles = () if rt.allow_static else tuple(
@@ -123,6 +129,12 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
         )
         objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles))
         requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
+        for rule in (r for r in plan.rules if r.kind == "require") if region.kind == "rectangle" else ():
+            # A require lowered to rows that read no position of its own is a test on the scene, the same.
+            condition = conditions.get(rule.label_id)
+            if condition is None or _reads_position(condition, name):
+                raise Unbatchable(f"{name}'s region has a require on its position")
+            requires.append((index, _require_test(compiler, condition, rule.soft)))
     soft = np.array([s.probability for s in cprog.soft_requires], dtype=float)
     return CandidatePlan(tuple(objects), tuple(requires), soft)
 
@@ -159,7 +171,8 @@ def _rotation(rt: ObjectRuntime, compiler: CandidateCompiler) -> tuple[BatchValu
     return value, np.eye(3)
 
 
-def _region(rt: ObjectRuntime, placed: _Placed, reach: float) -> tuple[Region, np.ndarray, np.ndarray]:
+def _region(rt: ObjectRuntime, placed: _Placed, reach: float, compiler: CandidateCompiler
+            ) -> tuple[Region, np.ndarray, np.ndarray]:
     """The object's region as candidates draw it, and bounds of its centre in every candidate."""
     provider, name = rt.provider, rt.plan.name
     try:
@@ -173,7 +186,7 @@ def _region(rt: ObjectRuntime, placed: _Placed, reach: float) -> tuple[Region, n
             return _carried(rt, placed)
     except (EmptyRegionError, UnboundedRegionError):
         raise Unbatchable(f"{name}'s region is empty or unbounded") from None
-    return _rectangle(rt, placed, reach)
+    return _rectangle(rt, placed, reach, compiler)
 
 
 def _carried(rt: ObjectRuntime, placed: _Placed) -> tuple[Region, np.ndarray, np.ndarray]:
@@ -194,14 +207,16 @@ def _carried(rt: ObjectRuntime, placed: _Placed) -> tuple[Region, np.ndarray, np
     return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
 
 
-def _rectangle(rt: ObjectRuntime, placed: _Placed, reach: float) -> tuple[Region, np.ndarray, np.ndarray]:
-    """`[completely] on`/`in` an earlier object of fixed size, inside the workspace."""
+def _rectangle(rt: ObjectRuntime, placed: _Placed, reach: float, compiler: CandidateCompiler
+               ) -> tuple[Region, np.ndarray, np.ndarray]:
+    """`[completely] on`/`in` an earlier object of fixed size, inside the workspace, cut by the
+    object's other rules (directions, fixed or carried rows) into a convex polygon."""
     name = rt.plan.name
     surfaces = [r for r in rt.plan.rules if r.kind == "on"]
-    others = [r for r in rt.plan.rules if r.kind not in ("on", "workspace")]
-    if len(surfaces) != 1 or others:
+    if len(surfaces) != 1:
         kinds = sorted({r.kind for r in rt.plan.rules})
-        raise Unbatchable(f"{name}'s region ({', '.join(kinds)}) changes shape between scenes")
+        raise Unbatchable(f"{name}'s region ({', '.join(kinds)}) is not on one object")
+    cuts = tuple(_cut(r, rt, placed, compiler) for r in rt.plan.rules if r.kind not in ("on", "workspace", "require"))
     rule = surfaces[0]
     target = rule.args[0]
     if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
@@ -235,7 +250,64 @@ def _rectangle(rt: ObjectRuntime, placed: _Placed, reach: float) -> tuple[Region
         if not rows_hold(constant_region(workspace), _corners(lo, hi)):
             raise Unbatchable(f"{name}'s region may be cut by the workspace")
     return Region("rectangle", anchor=target.name, interior=interior, half_size=half,
-                  completely=completely), lo, hi
+                  completely=completely, cuts=cuts), lo, hi
+
+
+def _cut(rule: Rule, rt: ObjectRuntime, placed: _Placed, compiler: CandidateCompiler) -> Cut:
+    """A rule that cuts the rectangle, as rows per candidate: a direction (specifiers.rows_direction),
+    or rows the compiler fixed for every scene (a static template, or one carried by an anchor for
+    an object of fixed size and rotation)."""
+    me = rt.plan.name
+    template = rule.template
+    if template is not None and (template.anchor is None or rt.support is not None):
+        rows, anchor = template.rows, template.anchor
+        if len(rows.d) or (anchor is not None and anchor not in placed.runtimes):
+            raise Unbatchable(f"{me}'s `{rule.kind}` rows are equalities or carried by a later object")
+        a, b = rows.A, rows.b
+
+        def fixed(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
+            n = len(state.keys)
+            shift = 0.0 if anchor is None else state.positions[anchor] @ a.T
+            return np.broadcast_to(a, (n,) + a.shape), np.broadcast_to(b + shift, (n, len(b)))
+
+        return fixed
+    if rule.kind != "direction":
+        raise Unbatchable(f"{me}'s `{rule.kind}` rule")
+    target = rule.args[0]
+    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
+        raise Unbatchable(f"{me} is placed relative to something other than an object placed before it")
+    by = compiler.compile(rule.args[1]) if len(rule.args) > 1 else None
+    up_to = compiler.compile(rule.args[2]) if len(rule.args) > 2 else None
+    if any(v is not None and v.vector for v in (by, up_to)):
+        raise Unbatchable(f"{me}'s distance from {target.name} is a vector")
+    if by is not None and up_to is not None and not up_to.lo[0] > by.hi[0]:
+        raise Unbatchable(f"{me}'s band beside {target.name} may be a line")  # a segment, not a polygon
+    axis, other = DIRECTION_AXES[rule.option("relation")], target.name
+
+    def direction(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
+        # n.(p - X) >= d + s(n), and <= e + s(n) with `by (d, e)`.
+        n = state.rotations[other] @ axis
+        base = np.einsum("ni,ni->n", n, state.positions[other]) \
+            + support(n[:, None, :], state.rotations[me], state.dims[me] * 0.5)[:, 0]
+        low = base if by is None else base + by.fn(state)[:, 0]
+        if up_to is None:
+            return -n[:, None, :], -low[:, None]
+        return np.stack([-n, n], axis=1), np.stack([-low, base + up_to.fn(state)[:, 0]], axis=1)
+
+    return direction
+
+
+def _reads_position(expr: Any, name: str) -> bool:
+    """Whether an expression reads the object's position (anything of it but its size), conservatively."""
+    if isinstance(expr, ir.PropertyRef) and isinstance(expr.target, ir.ObjectRef) and expr.target.name == name:
+        return expr.prop not in DIMENSIONS
+    if isinstance(expr, ir.ObjectRef):
+        return expr.name == name
+    if isinstance(expr, tuple):
+        return any(_reads_position(e, name) for e in expr)
+    if isinstance(expr, ir.Expr):
+        return any(_reads_position(getattr(expr, f.name), name) for f in fields(expr))
+    return False
 
 
 def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:

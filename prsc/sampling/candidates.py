@@ -28,6 +28,7 @@ from prsc.constraints.model import ConstraintProgram
 from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.obb import CONTACT_TOL, pair_overlaps
+from prsc.geometry.polygon import polygon_points
 from prsc.sampling.candidate_plan import CandidateObject, CandidatePlan, Region
 from prsc.sampling.candidate_rules import support
 from prsc.sampling.candidate_values import CandidateState
@@ -71,7 +72,8 @@ class CandidateSampler:
         for round_ in range(ROUNDS):
             if not len(pending):
                 break
-            state, ok = self.evaluate(candidate_keys(keys[pending], round_ * PER_ROUND, PER_ROUND))
+            state, ok = self.evaluate(candidate_keys(keys[pending], round_ * PER_ROUND, PER_ROUND),
+                                      np.repeat(keys[pending], PER_ROUND))
             ok = ok.reshape(len(pending), PER_ROUND)
             passed = ok.any(axis=1)
             rows = np.flatnonzero(passed) * PER_ROUND + ok.argmax(axis=1)[passed]
@@ -83,13 +85,15 @@ class CandidateSampler:
             pending = pending[~passed]
         return results
 
-    def evaluate(self, keys: np.ndarray) -> tuple[CandidateState, np.ndarray]:
-        """Every candidate of `keys` drawn and tested: (its state, which passed)."""
+    def evaluate(self, keys: np.ndarray, scenes: np.ndarray) -> tuple[CandidateState, np.ndarray]:
+        """Every candidate of `keys` (of scene keys `scenes`) drawn and tested: (its state, which passed)."""
         state = CandidateState(keys)
         n = len(keys)
         ok = np.ones(n, dtype=bool)
         if len(self.plan.soft):
-            state.active = uniforms(keys, self._soft_site, len(self.plan.soft)) < self.plan.soft
+            # Which soft requires a scene enforces is drawn once per scene, as the sequential sampler
+            # does: `require[p]` holds in a fraction p of scenes, whatever its candidates did.
+            state.active = uniforms(scenes, self._soft_site, len(self.plan.soft)) < self.plan.soft
         for test in self._after.get(-1, ()):
             ok &= test(state)
         for k, item in enumerate(self.plan.objects):
@@ -164,8 +168,20 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
     if region.completely:
         hx, hy = hx - s[:, 0], hy - s[:, 1]
         valid = (hx >= 0.0) & (hy >= 0.0)  # the footprint does not fit: an empty region, never drawn
-    x, y = (2.0 * u[:, 0] - 1.0) * hx, (2.0 * u[:, 1] - 1.0) * hy
     lift = s[:, 2] + (region.interior.floor_top if region.interior is not None else state.dims[region.anchor][:, 2] * 0.5)
+    if region.cuts:
+        # Each cut a.p <= b on p = pos + x u + y v + lift up is a half-plane in (x, y).
+        rows = [(np.full(n, 1.0), np.zeros(n), hx), (np.full(n, -1.0), np.zeros(n), hx),
+                (np.zeros(n), np.full(n, 1.0), hy), (np.zeros(n), np.full(n, -1.0), hy)]
+        for cut in region.cuts:
+            a, b = cut(state)
+            across = b - np.einsum("nmi,ni->nm", a, pos + lift[:, None] * rot[:, :, 2])
+            along_x, along_y = np.einsum("nmi,ni->nm", a, rot[:, :, 0]), np.einsum("nmi,ni->nm", a, rot[:, :, 1])
+            rows += [(along_x[:, j], along_y[:, j], across[:, j]) for j in range(a.shape[1])]
+        xy, inside = polygon_points(np.stack([np.stack(r, axis=1) for r in rows], axis=1), u)
+        x, y, valid = xy[:, 0], xy[:, 1], valid & inside
+    else:
+        x, y = (2.0 * u[:, 0] - 1.0) * hx, (2.0 * u[:, 1] - 1.0) * hy
     return pos + x[:, None] * rot[:, :, 0] + y[:, None] * rot[:, :, 1] + lift[:, None] * rot[:, :, 2], valid
 
 
