@@ -28,6 +28,7 @@ from prsc.errors import PrscError
 from prsc.geometry.container import Interior
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.obb import CONTACT_TOL
+from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable, _const
@@ -44,10 +45,25 @@ _RECTANGLE = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # Int
 
 
 @dataclass(frozen=True, eq=False)
+class AffineRows:
+    """A region carried by an anchor at t and cut by static rows, on the affine set its equalities
+    leave: p = origin + shift @ t + basis @ z, and the rows on z are a_z z <= b_z + b_t @ t."""
+
+    origin: np.ndarray  # (3,)
+    shift: np.ndarray  # (3, 3)
+    basis: np.ndarray  # (3, k), orthonormal columns: k = 0, 1 or 2
+    a_z: np.ndarray  # (m, k)
+    b_z: np.ndarray  # (m,)
+    b_t: np.ndarray  # (m, 3)
+    residual: np.ndarray  # (e, 3): the equalities' misfit for anchor t is residual @ t + misfit
+    misfit: np.ndarray  # (e,)
+
+
+@dataclass(frozen=True, eq=False)
 class Region:
     """Where a candidate's centre is drawn: its whole region given the objects before it."""
 
-    kind: str  # fixed | carried | rectangle (cut by `cuts`: a convex polygon)
+    kind: str  # fixed | carried | rectangle (cut by `cuts`: a convex polygon) | affine
     sampler: UniformSampler | None = None  # fixed, carried (about the anchor)
     point: np.ndarray | None = None  # fixed: a single point
     anchor: str | None = None  # carried, rectangle: the object it moves with
@@ -55,10 +71,13 @@ class Region:
     half_size: tuple[float, float] = (0.0, 0.0)  # rectangle: the face's or floor's half width and length
     completely: bool = False  # rectangle: shrunk by the footprint
     cuts: tuple[Cut, ...] = ()  # rectangle: further rows a.p <= b per candidate (`left of tray`, ...)
+    affine: AffineRows | None = None  # affine: carried rows and static rows on a point, line or plane
 
     @property
     def uniforms(self) -> int:
         """Uniforms one draw reads."""
+        if self.affine is not None:
+            return 3
         if self.sampler is not None:
             return self.sampler.dim + 1
         return 3 if self.cuts else 2
@@ -74,6 +93,12 @@ class CandidateObject:
     rotation: np.ndarray  # when yaw is None
     region: Region
     obstacles: tuple[str, ...]  # earlier objects its box must not collide with
+
+    @property
+    def upright(self) -> bool:
+        """Whether its box's third axis is vertical in every candidate (a yaw at most)."""
+        r = self.rotation
+        return self.yaw is not None or bool(r[2, 2] == 1.0 and r[0, 2] == r[1, 2] == r[2, 0] == r[2, 1] == 0.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,7 +208,10 @@ def _region(rt: ObjectRuntime, placed: _Placed, reach: float, compiler: Candidat
                 raise Unbatchable(f"{name}'s region is empty or unbounded")
             return Region("fixed", prepared.sampler, prepared.point), prepared.lo, prepared.hi
         if provider.mode == "anchored" and rt.support is not None:
-            return _carried(rt, placed)
+            try:
+                return _carried(rt, placed)
+            except Unbatchable:
+                return _affine(rt, placed)  # cut by the static rows in some candidates
     except (EmptyRegionError, UnboundedRegionError):
         raise Unbatchable(f"{name}'s region is empty or unbounded") from None
     return _rectangle(rt, placed, reach, compiler)
@@ -205,6 +233,60 @@ def _carried(rt: ObjectRuntime, placed: _Placed) -> tuple[Region, np.ndarray, np
     if static is not None and (len(static.d) or not rows_hold(static, carried, 2 * TOL)):
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
     return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
+
+
+def _affine(rt: ObjectRuntime, placed: _Placed) -> tuple[Region, np.ndarray, np.ndarray]:
+    """Carried rows A (p - t) <= b, C (p - t) = d and static rows A' p <= b', C' p = d' (regions.RegionProvider's
+    anchored mode, cut by its static rows), solved for the affine set of the equalities once."""
+    provider, name = rt.provider, rt.plan.name
+    anchor, carried, static = provider.plan.anchor, provider.plan.anchored_rows, provider.static_rows
+    if anchor not in placed.runtimes or carried is None:
+        raise Unbatchable(f"{name}'s region carried by {anchor}")
+    empty = Polytope.everything()
+    static = static if static is not None else empty
+    # Equalities on p: C p = d + C t (carried) and C' p = d' (static), i.e. E p = f + G t.
+    e = np.vstack([carried.C, static.C])
+    f = np.concatenate([carried.d, static.d])
+    g = np.vstack([carried.C, np.zeros_like(static.C)])
+    if len(e):
+        _, sv, vt = np.linalg.svd(e)
+        rank = int(np.sum(sv > 1e-9 * max(sv[0], 1.0)))
+        pinv = np.linalg.pinv(e)
+        origin, shift, basis = pinv @ f, pinv @ g, vt[rank:].T
+    else:
+        origin, shift, basis = np.zeros(3), np.zeros((3, 3)), np.eye(3)
+    if basis.shape[1] > 2:
+        raise Unbatchable(f"{name}'s carried region is solid and cut by its static rows")
+    # Inequalities: A (origin + shift t + B z - t) <= b and A' (origin + shift t + B z) <= b'.
+    a = np.vstack([carried.A, static.A])
+    b_z = np.concatenate([carried.b - carried.A @ origin, static.b - static.A @ origin])
+    b_t = -np.vstack([carried.A @ (shift - np.eye(3)), static.A @ shift])
+    residual = e @ shift - g if len(e) else np.zeros((0, 3))
+    misfit = e @ origin - f if len(e) else np.zeros(0)
+    rows = AffineRows(origin, shift, basis, a @ basis, b_z, b_t, residual, misfit)
+    lo_a, hi_a = placed.bounds[anchor]
+    try:
+        own = provider.fixed_bounds()  # the carried region's bounds about its anchor, when bounded
+    except (EmptyRegionError, UnboundedRegionError):
+        own = None
+    if own is None:
+        if not len(static.b):
+            raise Unbatchable(f"{name}'s carried region is unbounded")
+        lo, hi = _static_bounds(static)
+    else:
+        lo, hi = lo_a + own[0], hi_a + own[1]
+    return Region("affine", anchor=anchor, affine=rows), lo, hi
+
+
+def _static_bounds(rows: Polytope) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of a polytope's points (a box around it), or Unbatchable when it is unbounded."""
+    from prsc.sampling.prepared import prepare
+
+    try:
+        prepared = prepare(rows)
+    except (EmptyRegionError, UnboundedRegionError):
+        raise Unbatchable("a region that is empty or unbounded") from None
+    return prepared.lo, prepared.hi
 
 
 def _rectangle(rt: ObjectRuntime, placed: _Placed, reach: float, compiler: CandidateCompiler

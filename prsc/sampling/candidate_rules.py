@@ -19,7 +19,7 @@ Test = Callable[[CandidateState], np.ndarray]  # (n,) bool: the candidates that 
 
 def support(normals: np.ndarray, rotation: np.ndarray, half: np.ndarray) -> np.ndarray:
     """s(n) of each candidate's box along its own normals: normals (n, m, 3), rotation (n, 3, 3), half (n, 3) -> (n, m)."""
-    return np.einsum("nmj,nj->nm", np.abs(np.einsum("nmi,nij->nmj", normals, rotation)), half)
+    return (np.abs(np.matmul(normals, rotation)) * half[:, None, :]).sum(axis=2)
 
 
 def constant_region(rule: Rule) -> Polytope:

@@ -1,16 +1,17 @@
 """The joint law by whole-scene rejection, vectorised over candidate scenes
 (docs/sampling.md, "Candidate rounds").
 
-The rejection reference (rejection.py) draws a whole scene from the base regions and
-keeps it when every rule, collision test and require holds; its law is the spec's joint
-law. Here each scene draws its candidates in rounds of `PER_ROUND`, all in numpy at once:
-every object's size, yaw and centre, then every test, over arrays with one row per
-candidate (candidate_plan.py decides how, once per spec). A scene keeps its first
+The rejection reference (`--law rejection`: engine.py's joint mode) draws every object
+uniformly on its whole region given the objects before it, ignoring collisions and
+rejection-checked requires, and keeps the scene when none collides and every require
+holds; its law is the spec's joint law. Here each scene draws its candidates in rounds, all
+in numpy at once: every object's size, yaw and centre, then every test, over arrays with
+one row per candidate (candidate_plan.py decides how, once per spec). A scene keeps its first
 candidate that passes, in candidate order. Candidate c of scene k under seed s reads the
 counter stream at (s, k, c) alone, so a scene is the same whatever other scenes share its
 batch, whatever -n, --jobs or Ray.
 
-When no candidate of `ROUNDS * PER_ROUND` passes (a packed spec, such as ten cubes in a
+When none of a scene's first `BUDGET` candidates passes (a packed spec, such as ten cubes in a
 tray), the scene is drawn by the Gibbs sampler instead, from its own Generator. Either
 way the scene follows the joint law: the first passing candidate is a draw of it, and
 whether any passes depends on the scene's stream alone, so the mixture of the two is the
@@ -27,20 +28,25 @@ from prsc.constraints.context import SceneContext
 from prsc.constraints.model import ConstraintProgram
 from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
-from prsc.geometry.obb import CONTACT_TOL, pair_overlaps
+from prsc.geometry.obb import CONTACT_TOL, pair_overlaps, upright_overlaps
 from prsc.geometry.polygon import polygon_points
-from prsc.sampling.candidate_plan import CandidateObject, CandidatePlan, Region
+from prsc.sampling.candidate_plan import AffineRows, CandidateObject, CandidatePlan, Region
 from prsc.sampling.candidate_rules import support
 from prsc.sampling.candidate_values import CandidateState
 from prsc.sampling.counter_stream import candidate_keys, scene_keys, uniforms
 from prsc.sampling.engine import SceneResult
+from prsc.sampling.prepared import TOL
 from prsc.sampling.runtime import ObjectRuntime, evaluate_params
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
 
-PER_ROUND = 64  # candidates per scene and round
-ROUNDS = 6  # rounds before a scene is left to the Gibbs sampler
-CHUNK = 64  # scenes evaluated together: memory grows with CHUNK * PER_ROUND rows, not with n
+# Candidates a scene may draw before it is left to the Gibbs sampler. A scene keeps its first
+# passing candidate by number, so how the budget is cut into rounds changes the cost, never
+# the scene: rounds start near the number of candidates scenes have needed so far (few where
+# the first candidate mostly passes, as in shelf_bin; about 100 in bin_picking) and double.
+BUDGET = 468
+FIRST_ROUND = (4, 128)  # bounds of the first round's size
+CHUNK = 64  # scenes evaluated together: memory grows with CHUNK * 2 * FIRST_ROUND[1] rows at most, not with n
 Drawn = Union[SceneResult, PrscError, None]  # a scene, the error of its properties, or None: no candidate passed
 REJECTED = "candidate"  # the rejection statistics' cause for candidates that failed a test
 
@@ -53,6 +59,8 @@ class CandidateSampler:
         self.cprog = cprog
         self.runtimes = runtimes
         self._soft_site = 4 * len(plan.objects)  # even sites 4k are the objects' centres, odd ones the draws'
+        self._upright = {item.name: item.upright for item in plan.objects}
+        self._kept = self._needed = 0  # scenes kept and the candidates they needed: the next rounds' sizes
         self._after: dict[int, list] = {}
         for last, test in plan.requires:
             self._after.setdefault(last, []).append(test)
@@ -69,21 +77,30 @@ class CandidateSampler:
         keys = scene_keys(seed, np.asarray(indices, dtype=np.uint64))
         results: list[Drawn] = [None] * len(indices)
         pending = np.arange(len(indices))
-        for round_ in range(ROUNDS):
-            if not len(pending):
-                break
-            state, ok = self.evaluate(candidate_keys(keys[pending], round_ * PER_ROUND, PER_ROUND),
-                                      np.repeat(keys[pending], PER_ROUND))
-            ok = ok.reshape(len(pending), PER_ROUND)
+        first = 0  # the round's first candidate number
+        size = self._first_round()
+        while len(pending) and first < BUDGET:
+            size = min(size, BUDGET - first)
+            state, ok = self.evaluate(candidate_keys(keys[pending], first, size), np.repeat(keys[pending], size))
+            ok = ok.reshape(len(pending), size)
             passed = ok.any(axis=1)
-            rows = np.flatnonzero(passed) * PER_ROUND + ok.argmax(axis=1)[passed]
+            rows = np.flatnonzero(passed) * size + ok.argmax(axis=1)[passed]
             for scene, row, tried in zip(pending[passed], rows, ok.argmax(axis=1)[passed]):
                 try:
-                    results[scene] = self._result(state, int(row), seed, indices[scene], round_ * PER_ROUND + int(tried))
+                    results[scene] = self._result(state, int(row), seed, indices[scene], first + int(tried))
                 except PrscError as error:  # a property this scene cannot have: reported when the scene is asked for
                     results[scene] = error
+            self._kept += int(passed.sum())
+            self._needed += int((first + ok.argmax(axis=1)[passed] + 1).sum())
             pending = pending[~passed]
+            first += size
+            size = min(2 * size, 2 * FIRST_ROUND[1])
         return results
+
+    def _first_round(self) -> int:
+        """About 1.5 times the candidates a scene has needed on average so far (cost only: see BUDGET)."""
+        mean = self._needed / self._kept if self._kept else FIRST_ROUND[0]
+        return int(min(max(1.5 * mean, FIRST_ROUND[0]), FIRST_ROUND[1]))
 
     def evaluate(self, keys: np.ndarray, scenes: np.ndarray) -> tuple[CandidateState, np.ndarray]:
         """Every candidate of `keys` (of scene keys `scenes`) drawn and tested: (its state, which passed)."""
@@ -104,8 +121,12 @@ class CandidateSampler:
             ok &= valid
             # The box's axis-aligned half extents, for the broad phase of later pairs too.
             state.reaches[item.name] = np.einsum("nij,nj->ni", np.abs(state.rotations[item.name]), state.dims[item.name] * 0.5)
-            for other in item.obstacles:
-                ok &= ~_collide(state, item.name, other, ok)
+            if item.obstacles:
+                alive = np.flatnonzero(ok)  # only candidates still standing are tested
+                for other in item.obstacles:
+                    alive = alive[~_collide(state, item.name, other, alive, item.upright and self._upright[other])]
+                ok[:] = False
+                ok[alive] = True
             for test in self._after.get(k, ()):
                 ok &= test(state)
         return state, ok
@@ -158,6 +179,8 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
         assert region.sampler is not None
         return region.sampler.points(u), valid
     assert region.anchor is not None
+    if region.affine is not None:
+        return _affine_points(region.affine, state.positions[region.anchor], u)
     if region.kind == "carried":
         assert region.sampler is not None
         return region.sampler.points(u) + state.positions[region.anchor], valid
@@ -185,17 +208,42 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
     return pos + x[:, None] * rot[:, :, 0] + y[:, None] * rot[:, :, 1] + lift[:, None] * rot[:, :, 2], valid
 
 
-def _collide(state: CandidateState, a: str, b: str, alive: np.ndarray) -> np.ndarray:
-    """Which live candidates' boxes of a and b collide (collisions.first_hit's test: broad phase, then SAT)."""
-    pa, pb = state.positions[a], state.positions[b]
-    reach = state.reaches[a] + state.reaches[b] - CONTACT_TOL
-    close = np.flatnonzero(alive & np.all(np.abs(pa - pb) < reach, axis=1))
-    hit = np.zeros(len(pa), dtype=bool)
+def _affine_points(rows: AffineRows, anchor: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points uniform on each candidate's carried, cut region (a point, segment or polygon in z)."""
+    n, k = len(u), rows.basis.shape[1]
+    valid = np.all(np.abs(anchor @ rows.residual.T + rows.misfit) <= TOL, axis=1)  # the equalities meet
+    b = rows.b_z + anchor @ rows.b_t.T  # (n, m)
+    if k == 2:
+        z, area = polygon_points(np.concatenate([np.broadcast_to(rows.a_z, b.shape + (2,)), b[:, :, None]], axis=2), u)
+        valid &= area
+    elif k == 1:
+        c = rows.a_z[:, 0]
+        upper = np.min(np.where(c > 0, b / np.where(c > 0, c, 1.0), np.inf), axis=1, initial=np.inf)
+        lower = np.max(np.where(c < 0, b / np.where(c < 0, c, 1.0), -np.inf), axis=1, initial=-np.inf)
+        flat = np.all(np.where(c == 0, b >= -TOL, True), axis=1)
+        valid &= (upper > lower) & flat & np.isfinite(upper) & np.isfinite(lower)
+        z = (lower + (upper - lower) * u[:, 0])[:, None]
+        z = np.where(valid[:, None], z, 0.0)
+    else:
+        z = np.zeros((n, 0))
+        valid &= np.all(b >= -TOL * np.maximum(1.0, np.abs(b)), axis=1)
+    return rows.origin + anchor @ rows.shift.T + z @ rows.basis.T, valid
+
+
+def _collide(state: CandidateState, a: str, b: str, rows: np.ndarray, upright: bool) -> np.ndarray:
+    """Which of the candidates `rows` have boxes of a and b that collide (collisions.first_hit's test:
+    broad phase, then SAT; `upright`: both boxes only yaw, so 5 of the 15 axes decide)."""
+    pa, pb = state.positions[a][rows], state.positions[b][rows]
+    reach = state.reaches[a][rows] + state.reaches[b][rows] - CONTACT_TOL
+    close = np.flatnonzero(np.all(np.abs(pa - pb) < reach, axis=1))
+    hit = np.zeros(len(rows), dtype=bool)
     if len(close):
-        ra, ha = state.rotations[a][close], state.dims[a][close] * 0.5
-        rb, hb = state.rotations[b][close], state.dims[b][close] * 0.5
-        hit[close] = pair_overlaps(pa[close], ra, ha, pb[close], rb, hb) > CONTACT_TOL
+        picked = rows[close]
+        ra, ha = state.rotations[a][picked], state.dims[a][picked] * 0.5
+        rb, hb = state.rotations[b][picked], state.dims[b][picked] * 0.5
+        overlaps = upright_overlaps if upright else pair_overlaps
+        hit[close] = overlaps(pa[close], ra, ha, pb[close], rb, hb) > CONTACT_TOL
     return hit
 
 
-__all__ = ["CandidateSampler", "CHUNK", "PER_ROUND", "ROUNDS"]
+__all__ = ["BUDGET", "CandidateSampler", "CHUNK"]

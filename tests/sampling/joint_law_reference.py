@@ -28,9 +28,13 @@ SPECS = {
 
 
 def planar(spec: str, law: str, seed: int, indices: range) -> np.ndarray:
-    """x and y of the spec's objects (z is fixed by `on`) in scenes `indices` of one law and seed."""
+    """x and y of the spec's objects (z is fixed by `on`) in scenes `indices` of one law and seed
+    (law "gibbs": the joint law by Gibbs sweeps alone, without candidate rounds)."""
     names, relative_to = SPECS[spec]
-    sampler = compile_sampler(DATA / f"{spec}.prs", law=law)
+    if law == "gibbs":
+        sampler = compile_sampler(DATA / f"{spec}.prs", law="joint", batched=False)
+    else:
+        sampler = compile_sampler(DATA / f"{spec}.prs", law=law)
     rows = [coordinates(sampler.sample(seed, i), names, relative_to) for i in indices]
     return np.array(rows).reshape(len(indices), len(names), 3)[:, :, :2].reshape(len(indices), -1)
 

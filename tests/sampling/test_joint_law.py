@@ -9,7 +9,8 @@ scenes per spec), checked against fresh draws; each law under test draws N scene
 
 Power: with N = 500 against 4,000, a per-coordinate KS test at p < 0.01 detects a shift
 of the CDF by 0.08; the sequential law, at the same N, gives p = 2e-21 (cups) and 3e-4
-(tray) (the companion test), the joint law p = 0.34 and 0.30 (seeds below).
+(tray) (the companion test). The default law draws both by candidate rounds
+(prsc/sampling/candidates.py); the Gibbs sweeps it falls back to are tested alone on the cups.
 """
 
 from __future__ import annotations
@@ -32,7 +33,10 @@ from tests.sampling.joint_law_reference import SEED as REFERENCE_SEED
 P_MIN = 0.01  # every coordinate of the default law: KS p >= P_MIN; the sequential law: some p < P_MIN
 N = 500  # scenes per law under test and spec
 CHUNKS = 2  # each law's scenes are drawn in index chunks, spread over two worker processes
-SEEDS = {"joint": 202, "sequential": 202}
+SEEDS = {"joint": 202, "sequential": 202, "gibbs": 202}
+# The default law draws both specs by candidate rounds; the Gibbs sweeps it falls back to are
+# tested on the cups, where the sequential law is furthest from the joint one.
+LAWS_OF = {"aligned_cups": ("joint", "sequential", "gibbs"), "tray_four_cubes": ("joint", "sequential")}
 
 
 def _chunk(spec: str, law: str, start: int) -> np.ndarray:
@@ -47,11 +51,11 @@ def reference() -> dict[str, np.ndarray]:
 
 @pytest.fixture(scope="module")
 def samples() -> dict[tuple[str, str], np.ndarray]:
-    jobs = [(spec, law, c * (N // CHUNKS)) for spec in SPECS for law in SEEDS for c in range(CHUNKS)]
+    jobs = [(spec, law, c * (N // CHUNKS)) for spec in SPECS for law in LAWS_OF[spec] for c in range(CHUNKS)]
     with ProcessPoolExecutor(max_workers=2, mp_context=get_context("fork")) as pool:
         parts = list(pool.map(_chunk, *zip(*jobs)))
     return {(spec, law): np.vstack([p for (s, w, _), p in zip(jobs, parts) if (s, w) == (spec, law)])
-            for spec in SPECS for law in SEEDS}
+            for spec in SPECS for law in LAWS_OF[spec]}
 
 
 @pytest.mark.parametrize("spec", sorted(SPECS))
@@ -65,6 +69,11 @@ def test_the_stored_reference_is_what_rejection_draws(reference, spec):
 @pytest.mark.parametrize("spec", sorted(SPECS))
 def test_the_default_law_matches_the_rejection_reference(samples, reference, spec):
     pvalues = [p for _, p in ks_per_coordinate(samples[spec, "joint"], reference[spec])]
+    assert min(pvalues) >= P_MIN, np.round(pvalues, 4)
+
+
+def test_the_gibbs_sweeps_alone_match_the_rejection_reference(samples, reference):
+    pvalues = [p for _, p in ks_per_coordinate(samples["aligned_cups", "gibbs"], reference["aligned_cups"])]
     assert min(pvalues) >= P_MIN, np.round(pvalues, 4)
 
 
@@ -114,8 +123,9 @@ def test_compile_keeps_the_law_in_the_folder_digest(tmp_path, capsys):
 
 
 def test_the_default_law_is_tested_on_both_of_its_samplers():
-    """The tray's default law is drawn by candidate rounds and the cups' by Gibbs sweeps, so the
-    KS tests above check both (docs/sampling.md, "Candidate rounds")."""
-    assert compile_sampler(DATA / "tray_four_cubes.prs").candidates
-    cups = compile_sampler(DATA / "aligned_cups.prs")
-    assert not cups.candidates and not cups.batched
+    """Both specs' default law is drawn by candidate rounds (docs/sampling.md, "Candidate rounds"),
+    and the cups' also by the Gibbs sweeps alone, so the KS tests above check both samplers."""
+    for spec in SPECS:
+        sampler = compile_sampler(DATA / f"{spec}.prs")
+        assert sampler.candidates and not sampler.batched, sampler.no_candidates_because
+    assert not compile_sampler(DATA / "aligned_cups.prs", batched=False).candidates
