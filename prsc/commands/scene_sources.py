@@ -101,7 +101,7 @@ def _nesting_place(text: str, limit: int) -> tuple[int, int]:
 def add_law_argument(parser: Any) -> None:
     """The --law option of the commands that sample a spec (docs/sampling.md)."""
     parser.add_argument("--law", choices=("joint", "sequential", "rejection"), default=None,
-                        help="joint (default: the paper's law, by Gibbs sweeps), sequential (objects one at a time, "
+                        help="joint (default: the paper's law, by candidate rounds or Gibbs sweeps), sequential (objects one at a time, "
                              "faster; the default with --proposal or --sampler hit-and-run), or rejection (the joint "
                              "law by whole-scene rejection: the exact reference)")
 

@@ -30,7 +30,8 @@ from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.obb import CONTACT_TOL, pair_overlaps, upright_overlaps
 from prsc.geometry.polygon import polygon_points
-from prsc.sampling.candidate_plan import AffineRows, CandidateObject, CandidatePlan, Region
+from prsc.sampling.candidate_plan import CandidateObject, CandidatePlan
+from prsc.sampling.candidate_regions import AffineRows, Region
 from prsc.sampling.candidate_rules import support
 from prsc.sampling.candidate_values import CandidateState
 from prsc.sampling.counter_stream import candidate_keys, scene_keys, uniforms

@@ -190,7 +190,8 @@ class Sampler:
                 return self.scene(seed, index)
             if index not in drawn:
                 drawn.clear()
-                chunk = range(index, index + ahead)
+                # Candidate rounds take 16 ahead: a worker asked for a few scenes draws few more.
+                chunk = range(index, index + (ahead if self._batch is not None else min(ahead, 16)))
                 # Candidate rounds hand over results, each made JSON (or its error raised) only when asked for:
                 # a scene that cannot be written does not take the scenes before it in the chunk with it.
                 drawn.update(zip(chunk, self.batch(seed, chunk) if self._batch is not None else self._candidates.draw(seed, chunk)))

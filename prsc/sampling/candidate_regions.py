@@ -1,0 +1,286 @@
+"""The regions candidate rounds draw an object's centre from (candidates.py): its whole region
+given the objects before it, as the rejection reference draws it (docs/sampling.md,
+"Candidate rounds"). Decided once per spec by the candidate plan (candidate_plan.py):
+- **fixed**: the same in every candidate (every rule static), drawn by its exact sampler;
+- **carried**: one region translated with an earlier object (a camera above the bin), when
+  the static rows provably never cut it (the batched sampler's proof, batched.py);
+- **affine**: for an object of fixed size and rotation, rows carried by an earlier object
+  and cut by static rows, solved once for the affine set their equalities leave (a point,
+  a segment or a polygon per candidate);
+- **rectangle**: `[completely] on`/`in` an earlier object of fixed size (its top face or its
+  container floor), shrunk by the footprint's support along its sides when `completely`,
+  when the workspace provably holds it; cut by the object's directions and fixed or carried
+  rows into a convex polygon.
+Anything else is Unbatchable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from prsc.constraints.model import Rule
+from prsc.constraints.specifiers import DIRECTION_AXES, interior_of
+from prsc.constraints.values import ObjectValue
+from prsc.errors import PrscError
+from prsc.geometry.container import Interior
+from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
+from prsc.geometry.polytope import Polytope
+from prsc.geometry.sampler import UniformSampler
+from prsc.ir import model as ir
+from prsc.sampling.batch_values import Unbatchable
+from prsc.sampling.batched import rows_hold
+from prsc.sampling.candidate_rules import constant_region, support
+from prsc.sampling.candidate_values import CandidateCompiler, CandidateState
+from prsc.sampling.prepared import TOL
+from prsc.sampling.runtime import ObjectRuntime
+
+# Rows a.p <= b of each candidate on its own centre: (a (n, m, 3), b (n, m)).
+Cut = Callable[[CandidateState], tuple[np.ndarray, np.ndarray]]
+_RECTANGLE = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # Interior.edges' normals of a box
+
+
+@dataclass(frozen=True, eq=False)
+class AffineRows:
+    """A region carried by an anchor at t and cut by static rows, on the affine set its equalities
+    leave: p = origin + shift @ t + basis @ z, and the rows on z are a_z z <= b_z + b_t @ t."""
+
+    origin: np.ndarray  # (3,)
+    shift: np.ndarray  # (3, 3)
+    basis: np.ndarray  # (3, k), orthonormal columns: k = 0, 1 or 2
+    a_z: np.ndarray  # (m, k)
+    b_z: np.ndarray  # (m,)
+    b_t: np.ndarray  # (m, 3)
+    residual: np.ndarray  # (e, 3): the equalities' misfit for anchor t is residual @ t + misfit
+    misfit: np.ndarray  # (e,)
+
+
+@dataclass(frozen=True, eq=False)
+class Region:
+    """Where a candidate's centre is drawn: its whole region given the objects before it."""
+
+    kind: str  # fixed | carried | rectangle (cut by `cuts`: a convex polygon) | affine
+    sampler: UniformSampler | None = None  # fixed, carried (about the anchor)
+    point: np.ndarray | None = None  # fixed: a single point
+    anchor: str | None = None  # carried, rectangle: the object it moves with
+    interior: Interior | None = None  # rectangle: the container floor (None: the top face)
+    half_size: tuple[float, float] = (0.0, 0.0)  # rectangle: the face's or floor's half width and length
+    completely: bool = False  # rectangle: shrunk by the footprint
+    cuts: tuple[Cut, ...] = ()  # rectangle: further rows a.p <= b per candidate (`left of tray`, ...)
+    affine: AffineRows | None = None  # affine: carried rows and static rows on a point, line or plane
+
+    @property
+    def uniforms(self) -> int:
+        """Uniforms one draw reads."""
+        if self.affine is not None:
+            return 3
+        if self.sampler is not None:
+            return self.sampler.dim + 1
+        return 3 if self.cuts else 2
+
+@dataclass(frozen=True)
+class Placed:
+    """What the plan knows of the objects before the one being planned."""
+
+    runtimes: dict[str, ObjectRuntime]
+    bounds: dict[str, tuple[np.ndarray, np.ndarray]]  # bounds of the centre in every candidate
+    reaches: dict[str, float]  # bound of the box's half diagonal
+
+def object_region(rt: ObjectRuntime, placed: Placed, reach: float, compiler: CandidateCompiler
+            ) -> tuple[Region, np.ndarray, np.ndarray]:
+    """The object's region as candidates draw it, and bounds of its centre in every candidate."""
+    provider, name = rt.provider, rt.plan.name
+    try:
+        if provider.mode == "static":
+            provider.fixed_bounds()
+            prepared = provider.static_prepared
+            if prepared is None:
+                raise Unbatchable(f"{name}'s region is empty or unbounded")
+            return Region("fixed", prepared.sampler, prepared.point), prepared.lo, prepared.hi
+        if provider.mode == "anchored" and rt.support is not None:
+            try:
+                return _carried(rt, placed)
+            except Unbatchable:
+                return _affine(rt, placed)  # cut by the static rows in some candidates
+    except (EmptyRegionError, UnboundedRegionError):
+        raise Unbatchable(f"{name}'s region is empty or unbounded") from None
+    return _rectangle(rt, placed, reach, compiler)
+
+
+def _carried(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.ndarray]:
+    """A region translated with an earlier object, which the static rows never cut (batched._anchored)."""
+    provider, name = rt.provider, rt.plan.name
+    anchor = provider.plan.anchor
+    provider.fixed_bounds()
+    prepared = provider.anchored_prepared
+    if prepared is None or prepared.sampler is None or anchor not in placed.bounds:
+        raise Unbatchable(f"{name}'s region carried by {anchor} may be cut, or is a point")
+    own = np.unique(prepared.sampler.vertices(), axis=0)
+    lo_a, hi_a = placed.bounds[anchor]
+    anchors = corners(lo_a, hi_a)
+    carried = (anchors[:, None, :] + own[None, :, :]).reshape(-1, 3)
+    static = provider.static_rows
+    if static is not None and (len(static.d) or not rows_hold(static, carried, 2 * TOL)):
+        raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
+    return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
+
+
+def _affine(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.ndarray]:
+    """Carried rows A (p - t) <= b, C (p - t) = d and static rows A' p <= b', C' p = d' (regions.RegionProvider's
+    anchored mode, cut by its static rows), solved for the affine set of the equalities once."""
+    provider, name = rt.provider, rt.plan.name
+    anchor, carried, static = provider.plan.anchor, provider.plan.anchored_rows, provider.static_rows
+    if anchor not in placed.runtimes or carried is None:
+        raise Unbatchable(f"{name}'s region carried by {anchor}")
+    empty = Polytope.everything()
+    static = static if static is not None else empty
+    # Equalities on p: C p = d + C t (carried) and C' p = d' (static), i.e. E p = f + G t.
+    e = np.vstack([carried.C, static.C])
+    f = np.concatenate([carried.d, static.d])
+    g = np.vstack([carried.C, np.zeros_like(static.C)])
+    if len(e):
+        _, sv, vt = np.linalg.svd(e)
+        rank = int(np.sum(sv > 1e-9 * max(sv[0], 1.0)))
+        pinv = np.linalg.pinv(e)
+        origin, shift, basis = pinv @ f, pinv @ g, vt[rank:].T
+    else:
+        origin, shift, basis = np.zeros(3), np.zeros((3, 3)), np.eye(3)
+    if basis.shape[1] > 2:
+        raise Unbatchable(f"{name}'s carried region is solid and cut by its static rows")
+    # Inequalities: A (origin + shift t + B z - t) <= b and A' (origin + shift t + B z) <= b'.
+    a = np.vstack([carried.A, static.A])
+    b_z = np.concatenate([carried.b - carried.A @ origin, static.b - static.A @ origin])
+    b_t = -np.vstack([carried.A @ (shift - np.eye(3)), static.A @ shift])
+    residual = e @ shift - g if len(e) else np.zeros((0, 3))
+    misfit = e @ origin - f if len(e) else np.zeros(0)
+    rows = AffineRows(origin, shift, basis, a @ basis, b_z, b_t, residual, misfit)
+    lo_a, hi_a = placed.bounds[anchor]
+    try:
+        own = provider.fixed_bounds()  # the carried region's bounds about its anchor, when bounded
+    except (EmptyRegionError, UnboundedRegionError):
+        own = None
+    if own is None:
+        if not len(static.b):
+            raise Unbatchable(f"{name}'s carried region is unbounded")
+        lo, hi = _static_bounds(static)
+    else:
+        lo, hi = lo_a + own[0], hi_a + own[1]
+    return Region("affine", anchor=anchor, affine=rows), lo, hi
+
+
+def _static_bounds(rows: Polytope) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds of a polytope's points (a box around it), or Unbatchable when it is unbounded."""
+    from prsc.sampling.prepared import prepare
+
+    try:
+        prepared = prepare(rows)
+    except (EmptyRegionError, UnboundedRegionError):
+        raise Unbatchable("a region that is empty or unbounded") from None
+    return prepared.lo, prepared.hi
+
+
+def _rectangle(rt: ObjectRuntime, placed: Placed, reach: float, compiler: CandidateCompiler
+               ) -> tuple[Region, np.ndarray, np.ndarray]:
+    """`[completely] on`/`in` an earlier object of fixed size, inside the workspace, cut by the
+    object's other rules (directions, fixed or carried rows) into a convex polygon."""
+    name = rt.plan.name
+    surfaces = [r for r in rt.plan.rules if r.kind == "on"]
+    if len(surfaces) != 1:
+        kinds = sorted({r.kind for r in rt.plan.rules})
+        raise Unbatchable(f"{name}'s region ({', '.join(kinds)}) is not on one object")
+    cuts = tuple(_cut(r, rt, placed, compiler) for r in rt.plan.rules if r.kind not in ("on", "workspace", "require"))
+    rule = surfaces[0]
+    target = rule.args[0]
+    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
+        raise Unbatchable(f"{name} rests on something other than an object placed before it")
+    carrier = placed.runtimes[target.name]
+    if carrier.dims is None:
+        raise Unbatchable(f"{name} rests on {target.name}, whose size changes between scenes")
+    interior = _interior(carrier, rule)
+    if interior is not None:
+        normals, offsets = interior.edges()
+        if normals.shape != _RECTANGLE.shape or not np.array_equal(normals, _RECTANGLE) or offsets[0] != offsets[1] \
+                or offsets[2] != offsets[3]:
+            raise Unbatchable(f"{name} rests in a container whose floor is not a centred rectangle")
+        half = (float(offsets[0]), float(offsets[2]))
+    else:
+        half = (carrier.dims[0] / 2, carrier.dims[1] / 2)
+    completely = bool(rule.option("completely"))
+    lift = interior.floor_top if interior is not None else carrier.dims[2] / 2
+    # The object's box lies in this prism on the face, in the carrier's frame (beyond its sides
+    # by up to its reach unless `completely`); the centre in the same prism.
+    over = 0.0 if completely else reach
+    prism = corners(np.array([-half[0] - over, -half[1] - over, lift]), np.array([half[0] + over, half[1] + over, lift + 2 * reach]))
+    lo_c, hi_c = placed.bounds[target.name]
+    if carrier.rotation is not None:
+        offsets = prism @ carrier.rotation.T
+        lo, hi = lo_c + offsets.min(axis=0), hi_c + offsets.max(axis=0)
+    else:
+        radius = float(np.linalg.norm(prism, axis=1).max())
+        lo, hi = lo_c - radius, hi_c + radius
+    for workspace in (r for r in rt.plan.rules if r.kind == "workspace"):
+        if not rows_hold(constant_region(workspace), corners(lo, hi)):
+            raise Unbatchable(f"{name}'s region may be cut by the workspace")
+    return Region("rectangle", anchor=target.name, interior=interior, half_size=half,
+                  completely=completely, cuts=cuts), lo, hi
+
+
+def _cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompiler) -> Cut:
+    """A rule that cuts the rectangle, as rows per candidate: a direction (specifiers.rows_direction),
+    or rows the compiler fixed for every scene (a static template, or one carried by an anchor for
+    an object of fixed size and rotation)."""
+    me = rt.plan.name
+    template = rule.template
+    if template is not None and (template.anchor is None or rt.support is not None):
+        rows, anchor = template.rows, template.anchor
+        if len(rows.d) or (anchor is not None and anchor not in placed.runtimes):
+            raise Unbatchable(f"{me}'s `{rule.kind}` rows are equalities or carried by a later object")
+        a, b = rows.A, rows.b
+
+        def fixed(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
+            n = len(state.keys)
+            shift = 0.0 if anchor is None else state.positions[anchor] @ a.T
+            return np.broadcast_to(a, (n,) + a.shape), np.broadcast_to(b + shift, (n, len(b)))
+
+        return fixed
+    if rule.kind != "direction":
+        raise Unbatchable(f"{me}'s `{rule.kind}` rule")
+    target = rule.args[0]
+    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
+        raise Unbatchable(f"{me} is placed relative to something other than an object placed before it")
+    by = compiler.compile(rule.args[1]) if len(rule.args) > 1 else None
+    up_to = compiler.compile(rule.args[2]) if len(rule.args) > 2 else None
+    if any(v is not None and v.vector for v in (by, up_to)):
+        raise Unbatchable(f"{me}'s distance from {target.name} is a vector")
+    if by is not None and up_to is not None and not up_to.lo[0] > by.hi[0]:
+        raise Unbatchable(f"{me}'s band beside {target.name} may be a line")  # a segment, not a polygon
+    axis, other = DIRECTION_AXES[rule.option("relation")], target.name
+
+    def direction(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
+        # n.(p - X) >= d + s(n), and <= e + s(n) with `by (d, e)`.
+        n = state.rotations[other] @ axis
+        base = np.einsum("ni,ni->n", n, state.positions[other]) \
+            + support(n[:, None, :], state.rotations[me], state.dims[me] * 0.5)[:, 0]
+        low = base if by is None else base + by.fn(state)[:, 0]
+        if up_to is None:
+            return -n[:, None, :], -low[:, None]
+        return np.stack([-n, n], axis=1), np.stack([-low, base + up_to.fn(state)[:, 0]], axis=1)
+
+    return direction
+
+def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:
+    """The container floor `on`/`in` the carrier means (specifiers.rows_on), or None: its top face."""
+    plan = carrier.plan
+    value = ObjectValue(plan.name, plan.class_name, plan.span, None, None, carrier.dims, dict(plan.static_props), plan.property_fns)
+    try:
+        interior = interior_of(value, plan.span, bool(rule.option("inside_asset")) or bool(rule.option("inside")))
+    except PrscError:
+        raise Unbatchable(f"{plan.name}'s interior is not a constant") from None
+    if rule.option("inside") and interior is None:
+        raise Unbatchable(f"`in {plan.name}`, which is no container")  # the scalar sampler explains it
+    return interior
+
+def corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)], dtype=float)
