@@ -10,6 +10,7 @@ joint law is drawn by Gibbs sweeps instead.
 
 from __future__ import annotations
 
+import math
 import operator
 from typing import Any, Callable
 
@@ -128,17 +129,17 @@ class CandidateCompiler(BatchCompiler):
         return [float(v.constant[0]) for v in values]
 
     def _truncnormal(self, e: ir.Distribution) -> BatchValue:
-        from scipy.special import ndtr, ndtri  # as distributions.py: not on every start-up
-
         mean, sd, low, high = self._constants(e.args, "TruncatedNormal's arguments")
         if not (sd > 0 and low < high):
             raise Unbatchable("a TruncatedNormal the scalar sampler refuses")
-        pa, pb = float(ndtr((low - mean) / sd)), float(ndtr((high - mean) / sd))
+        pa, pb = _normal_cdf((low - mean) / sd), _normal_cdf((high - mean) / sd)
         if not pb > pa:
             raise Unbatchable("a TruncatedNormal without mass")
         site = draw_site(e.draw_id)
 
         def draw(state: BatchState) -> np.ndarray:
+            from scipy.special import ndtri  # as distributions.py: when drawn, not on every start-up
+
             # The scalar draw's inverse CDF (distributions.py), one uniform per draw.
             value = mean + sd * ndtri(pa + (pb - pa) * uniforms(state.keys, site, 1))
             return np.clip(value, low, high)
@@ -159,6 +160,11 @@ class CandidateCompiler(BatchCompiler):
             return table[np.minimum(which, len(table) - 1)]
 
         return _memoised(e.draw_id, draw, table.min(keepdims=True), table.max(keepdims=True))
+
+
+def _normal_cdf(x: float) -> float:
+    """The standard normal CDF (scipy's ndtr, without importing scipy to compile a spec)."""
+    return 0.5 * math.erfc(-x / math.sqrt(2.0))
 
 
 def _call_bounds(func: str, args: list[BatchValue]) -> tuple[np.ndarray, np.ndarray]:

@@ -106,16 +106,29 @@ class Sampler:
                 self.unbatched_because = str(reason)
         # The joint law of a spec that does not batch: whole-scene rejection vectorised over
         # candidates (candidates.py), Gibbs sweeps for the scenes where no candidate passes.
-        self._candidates: CandidateSampler | None = None
+        self._planned: CandidateSampler | None = None
+        self._paying: bool | None = None  # whether candidate rounds pay: decided by a pilot on first use
         self.no_candidates_because = "" if self._batch is not None else "not the joint law of the exact sampler"
         if self._batch is None and batched and isinstance(self._engine, SequentialSampler) and sampler == "exact" \
                 and law == "joint" and proposal is None:
             try:
                 runtimes = self._engine.runtimes
-                self._candidates = CandidateSampler(candidate_plan(self.constraints, runtimes), self.constraints, runtimes)
+                self._planned = CandidateSampler(candidate_plan(self.constraints, runtimes), self.constraints, runtimes)
                 self.no_candidates_because = ""
             except Unbatchable as reason:
                 self.no_candidates_because = str(reason)
+
+    @property
+    def _candidates(self) -> CandidateSampler | None:
+        """The candidate sampler when candidate rounds draw this spec: planned, and paying (its pilot
+        draws scenes, so it runs when scenes are first asked for, not when a spec is checked)."""
+        if self._planned is None:
+            return None
+        if self._paying is None:
+            self._paying = self._planned.pays()
+            if not self._paying:
+                self.no_candidates_because = "too few candidates pass (a pilot of 8 scenes found fewer than 4)"
+        return self._planned if self._paying else None
 
     @property
     def candidates(self) -> bool:

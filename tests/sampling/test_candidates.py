@@ -16,6 +16,7 @@ import pytest
 from prsc.geometry.obb import pair_overlaps, projection_overlaps
 from prsc.geometry.rotations import quat_to_matrix
 from prsc.sampling import compile_sampler
+from prsc.sampling import candidates
 from prsc.sampling.candidates import REJECTED
 
 REPO = Path(__file__).resolve().parents[2]
@@ -66,12 +67,27 @@ def test_candidate_scenes_hold_the_spec():
                 assert overlap[0] <= 1e-6
 
 
-def test_a_packed_spec_falls_back_to_gibbs_sweeps_with_the_same_scenes():
-    """Ten cubes in a tray: no candidate passes, so the scene is the Gibbs sampler's, alone or not."""
+def test_a_packed_spec_is_left_to_gibbs_sweeps_by_the_pilot():
+    """Ten cubes in a tray: hardly a candidate passes, so the pilot leaves the spec to Gibbs sweeps."""
     sampler = compile_sampler(REPO / "specs" / "ten_cubes_tray.prs")
-    assert sampler.candidates
     gibbs = compile_sampler(REPO / "specs" / "ten_cubes_tray.prs", batched=False)
     assert sampler.batch(0, [5, 6]) == [gibbs.scene(0, 5), gibbs.scene(0, 6)]
+    assert not sampler.candidates and "pilot" in sampler.no_candidates_because
+
+
+def test_a_scene_without_a_passing_candidate_is_the_gibbs_samplers(monkeypatch):
+    """With a budget of 4 candidates most bin_picking scenes find none: those are drawn by the
+    Gibbs sweeps (the same scene as without candidate rounds), the others are candidates."""
+    sampler = compile_sampler(BIN)
+    assert sampler.candidates  # the pilot ran with the real budget
+    monkeypatch.setattr(candidates, "BUDGET", 4)
+    gibbs = compile_sampler(BIN, batched=False)
+    results = sampler.results(0, range(12))
+    drawn = [REJECTED in r.stats.counts or r.stats.total == 0 for r in results]
+    assert 0 < sum(drawn) < 12
+    for index, (result, by_candidate) in enumerate(zip(results, drawn)):
+        if not by_candidate:
+            assert sampler.to_json(result, 0, index) == gibbs.scene(0, index)
 
 
 def test_pair_overlaps_is_the_sat_of_each_pair():
