@@ -35,12 +35,13 @@ class CandidateObject:
     rotation: np.ndarray  # when yaw is None
     region: Region
     obstacles: tuple[str, ...]  # earlier objects its box must not collide with
+    toward: BatchValue | None = None  # `facing toward` this point: a yaw from its centre, once drawn
 
     @property
     def upright(self) -> bool:
         """Whether its box's third axis is vertical in every candidate (a yaw at most)."""
         r = self.rotation
-        return self.yaw is not None or bool(r[2, 2] == 1.0 and r[0, 2] == r[1, 2] == r[2, 0] == r[2, 1] == 0.0)
+        return self.yaw is not None or self.toward is not None or bool(r[2, 2] == 1.0 and r[0, 2] == r[1, 2] == r[2, 0] == r[2, 1] == 0.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -69,14 +70,14 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
         name = plan.name
         if plan.exclusions:
             raise Unbatchable(f"{name} has excluded cells (`not visible from`, `reachable by`)")
-        if rt.after_position:
-            raise Unbatchable(f"{name}'s rotation depends on its position")
+        if rt.after_position and rt.provider.mode != "static" and rt.provider.point_rule is None:
+            raise Unbatchable(f"{name}'s rotation depends on its position, and its region on its rotation")
         if rt.allow_static is None:
             raise Unbatchable(f"{name}'s allowCollisions changes between scenes")
         if any(rule.soft is not None for rule in plan.rules if rule.kind != "require"):
             raise Unbatchable(f"{name}'s region has a soft rule")
         sizes = _sizes(rt, decls[name], compiler)
-        yaw, rotation = _rotation(rt, compiler)
+        yaw, rotation, toward = _rotation(rt, compiler)
         reach = 0.5 * float(np.linalg.norm([s.hi[0] for s in sizes]))
         region, lo, hi = object_region(rt, placed, reach, compiler)
         placed.bounds[name], placed.reaches[name], placed.runtimes[name] = (lo, hi), reach, rt
@@ -85,7 +86,7 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
             other.name for j, other in enumerate(objects)
             if not runtimes[j].allow_static and j not in plan.rests_in and not _apart(placed, name, other.name)
         )
-        objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles))
+        objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles, toward))
         requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
         for rule in (r for r in plan.rules if r.kind == "require") if region.kind == "rectangle" else ():
             # A require lowered to rows that read no position of its own is a test on the scene, the same.
@@ -116,17 +117,22 @@ def _sizes(rt: ObjectRuntime, decl: Any, compiler: CandidateCompiler) -> tuple[B
     return own["width"], own["length"], own["height"]
 
 
-def _rotation(rt: ObjectRuntime, compiler: CandidateCompiler) -> tuple[BatchValue | None, np.ndarray]:
+def _rotation(rt: ObjectRuntime, compiler: CandidateCompiler) -> tuple[BatchValue | None, np.ndarray, BatchValue | None]:
+    """(a random yaw, the rotation when fixed, the point it faces toward) of an object's candidates."""
     if rt.rotation is not None:
-        return None, rt.rotation
+        return None, rt.rotation, None
     rule = rt.plan.orientation
     assert rule is not None
-    if rule.kind != "facing":
+    if rule.kind not in ("facing", "facing toward"):
         raise Unbatchable(f"{rt.plan.name}'s `{rule.kind}` changes between scenes")
     value = compiler.compile(rule.arg)
+    if rule.kind == "facing toward":
+        if not value.vector:
+            raise Unbatchable(f"{rt.plan.name} faces toward something that is not a point")
+        return None, np.eye(3), value
     if value.vector:
         raise Unbatchable(f"{rt.plan.name} faces a direction that changes between scenes")
-    return value, np.eye(3)
+    return value, np.eye(3), None
 
 
 def _reads_position(expr: Any, name: str) -> bool:

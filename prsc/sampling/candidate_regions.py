@@ -7,6 +7,10 @@ given the objects before it, as the rejection reference draws it (docs/sampling.
 - **affine**: for an object of fixed size and rotation, rows carried by an earlier object
   and cut by static rows, solved once for the affine set their equalities leave (a point,
   a segment or a polygon per candidate);
+- **point**: `at V` with V random, where the object's fixed rows hold;
+- **surface**: `[completely] on` a fixed planar region (a shelf's board), with the object's
+  own size and yaw: the region's polygon in its plane, shrunk along its edges by the
+  footprint's support when `completely`, cut as a rectangle is;
 - **rectangle**: `[completely] on`/`in` an earlier object of fixed size (its top face or its
   container floor), shrunk by the footprint's support along its sides when `completely`,
   when the workspace provably holds it; cut by the object's directions and fixed or carried
@@ -23,16 +27,16 @@ import numpy as np
 
 from prsc.constraints.model import Rule
 from prsc.constraints.specifiers import DIRECTION_AXES, interior_of
-from prsc.constraints.values import ObjectValue
+from prsc.constraints.values import ObjectValue, RegionValue
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
 from prsc.ir import model as ir
-from prsc.sampling.batch_values import Unbatchable
+from prsc.sampling.batch_values import BatchValue, Unbatchable
 from prsc.sampling.batched import rows_hold
-from prsc.sampling.candidate_rules import constant_region, support
+from prsc.sampling.candidate_rules import constant_region, constant_value_of, support
 from prsc.sampling.candidate_values import CandidateCompiler, CandidateState
 from prsc.sampling.prepared import TOL
 from prsc.sampling.runtime import ObjectRuntime
@@ -58,10 +62,22 @@ class AffineRows:
 
 
 @dataclass(frozen=True, eq=False)
+class Plane:
+    """A fixed planar region n.p = offset (n unit) with in-plane rows a.p <= b, and an orthonormal basis of the plane."""
+
+    normal: np.ndarray
+    offset: float
+    basis: np.ndarray  # (3, 2)
+    a: np.ndarray  # (m, 3)
+    b: np.ndarray  # (m,)
+    completely: bool
+
+
+@dataclass(frozen=True, eq=False)
 class Region:
     """Where a candidate's centre is drawn: its whole region given the objects before it."""
 
-    kind: str  # fixed | carried | rectangle (cut by `cuts`: a convex polygon) | affine
+    kind: str  # fixed | carried | rectangle or surface (cut by `cuts`: a convex polygon) | affine | point
     sampler: UniformSampler | None = None  # fixed, carried (about the anchor)
     point: np.ndarray | None = None  # fixed: a single point
     anchor: str | None = None  # carried, rectangle: the object it moves with
@@ -70,15 +86,20 @@ class Region:
     completely: bool = False  # rectangle: shrunk by the footprint
     cuts: tuple[Cut, ...] = ()  # rectangle: further rows a.p <= b per candidate (`left of tray`, ...)
     affine: AffineRows | None = None  # affine: carried rows and static rows on a point, line or plane
+    at: BatchValue | None = None  # point: `at V`, V random
+    plane: Plane | None = None  # surface: the plane and its rows
+    rows: Polytope | None = None  # point: the fixed rows V must meet
 
     @property
     def uniforms(self) -> int:
         """Uniforms one draw reads."""
         if self.affine is not None:
             return 3
+        if self.at is not None:
+            return 0
         if self.sampler is not None:
             return self.sampler.dim + 1
-        return 3 if self.cuts else 2
+        return 3 if self.cuts or self.plane is not None else 2
 
 @dataclass(frozen=True)
 class Placed:
@@ -106,7 +127,21 @@ def object_region(rt: ObjectRuntime, placed: Placed, reach: float, compiler: Can
                 return _affine(rt, placed)  # cut by the static rows in some candidates
     except (EmptyRegionError, UnboundedRegionError):
         raise Unbatchable(f"{name}'s region is empty or unbounded") from None
+    if provider.point_rule is not None:
+        return _point(rt, compiler)
     return _rectangle(rt, placed, reach, compiler)
+
+
+def _point(rt: ObjectRuntime, compiler: CandidateCompiler) -> tuple[Region, np.ndarray, np.ndarray]:
+    """`at V` with V random: the point, where the object's other rows (fixed ones only) hold."""
+    provider, name = rt.provider, rt.plan.name
+    if any(not rule.static for rule in provider.plan.rules if rule is not provider.point_rule):
+        raise Unbatchable(f"{name} is `at` a point and has other rules that change between scenes")
+    value = compiler.compile(provider.point_rule.args[0])  # type: ignore[union-attr]
+    if not value.vector:
+        raise Unbatchable(f"{name}'s `at` is not a point")
+    rows = provider.static_rows if provider.static_rows is not None else Polytope.everything()
+    return Region("point", at=value, rows=rows), value.lo.copy(), value.hi.copy()
 
 
 def _carried(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.ndarray]:
@@ -193,6 +228,8 @@ def _rectangle(rt: ObjectRuntime, placed: Placed, reach: float, compiler: Candid
     cuts = tuple(_cut(r, rt, placed, compiler) for r in rt.plan.rules if r.kind not in ("on", "workspace", "require"))
     rule = surfaces[0]
     target = rule.args[0]
+    if isinstance(target, ir.SurfaceRef):
+        return _surface(rt, rule, reach, cuts)
     if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
         raise Unbatchable(f"{name} rests on something other than an object placed before it")
     carrier = placed.runtimes[target.name]
@@ -225,6 +262,32 @@ def _rectangle(rt: ObjectRuntime, placed: Placed, reach: float, compiler: Candid
             raise Unbatchable(f"{name}'s region may be cut by the workspace")
     return Region("rectangle", anchor=target.name, interior=interior, half_size=half,
                   completely=completely, cuts=cuts), lo, hi
+
+
+def _surface(rt: ObjectRuntime, rule: Rule, reach: float, cuts: tuple[Cut, ...]) -> tuple[Region, np.ndarray, np.ndarray]:
+    """`[completely] on` a fixed planar region (a shelf's board): its polygon in the plane, shrunk by the
+    footprint's support along each edge when `completely` (specifiers._rows_on_surface)."""
+    name = rt.plan.name
+    value = constant_value_of(rule)
+    if not isinstance(value, RegionValue) or value.normal is None:
+        raise Unbatchable(f"{name} rests on a region that is not a fixed plane")
+    normal = np.asarray(value.normal, dtype=float)
+    poly = value.poly
+    planes = [float(d) / float(c @ normal) for c, d in zip(poly.C, poly.d) if abs(abs(float(c @ normal)) - np.linalg.norm(c)) <= 1e-9]
+    if len(planes) != len(poly.d) or not planes or not np.isclose(np.linalg.norm(normal), 1.0):
+        raise Unbatchable(f"{name} rests on a region that is not one plane")
+    if value.clearance is not None and 2 * reach > value.clearance:
+        raise Unbatchable(f"{name} may not fit under the next board")  # the scalar sampler explains it
+    try:
+        lo, hi = _static_bounds(poly)
+    except Unbatchable:
+        raise Unbatchable(f"{name} rests on an unbounded plane") from None
+    for workspace in (r for r in rt.plan.rules if r.kind == "workspace"):
+        if not rows_hold(constant_region(workspace), corners(lo - 2 * reach, hi + 2 * reach)):
+            raise Unbatchable(f"{name}'s region may be cut by the workspace")
+    basis = np.linalg.svd(normal[None, :])[2][1:].T  # (3, 2): orthonormal, in the plane
+    plane = Plane(normal, planes[0], basis, poly.A, poly.b, bool(rule.option("completely")))
+    return Region("surface", plane=plane, cuts=cuts), lo - 2 * reach, hi + 2 * reach
 
 
 def _cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompiler) -> Cut:

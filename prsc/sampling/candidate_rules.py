@@ -22,12 +22,17 @@ def support(normals: np.ndarray, rotation: np.ndarray, half: np.ndarray) -> np.n
     return (np.abs(np.matmul(normals, rotation)) * half[:, None, :]).sum(axis=2)
 
 
+def constant_value_of(rule: Rule) -> object:
+    """A rule's first argument when it is the same in every scene (Unbatchable otherwise)."""
+    try:
+        return rule.values[0](SceneContext(None))  # type: ignore[arg-type]  # a constant reads no stream
+    except Exception:  # noqa: BLE001 - any failure means the value is not a constant
+        raise Unbatchable("a value that changes between scenes") from None
+
+
 def constant_region(rule: Rule) -> Polytope:
     """The fixed region a workspace rule reads (Unbatchable unless it is the same in every scene)."""
-    try:
-        value = rule.values[0](SceneContext(None))  # type: ignore[arg-type]  # a constant reads no stream
-    except Exception:  # noqa: BLE001 - any failure means the region is not a constant
-        raise Unbatchable("a region that changes between scenes") from None
+    value = constant_value_of(rule)
     if not isinstance(value, RegionValue) or len(value.poly.d):
         raise Unbatchable("a workspace that is not a solid region")
     return value.poly

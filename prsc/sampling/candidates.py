@@ -133,6 +133,8 @@ class CandidateSampler:
             state.rotations[item.name] = _rotations(item, state, n)
             position, valid = _draw(item.region, item.name, state, uniforms(keys, 4 * k, item.region.uniforms))
             state.positions[item.name] = position
+            if item.toward is not None:
+                state.rotations[item.name] = _facing(np.broadcast_to(item.toward.fn(state), (n, 3)) - position)
             ok &= valid
             # The box's axis-aligned half extents, for the broad phase of later pairs too.
             state.reaches[item.name] = np.einsum("nij,nj->ni", np.abs(state.rotations[item.name]), state.dims[item.name] * 0.5)
@@ -177,7 +179,19 @@ class CandidateSampler:
 def _rotations(item: CandidateObject, state: CandidateState, n: int) -> np.ndarray:
     if item.yaw is None:
         return np.broadcast_to(item.rotation, (n, 3, 3))
-    yaw = np.broadcast_to(item.yaw.fn(state), (n, 1))[:, 0]
+    return _yaws(np.broadcast_to(item.yaw.fn(state), (n, 1))[:, 0])
+
+
+def _facing(direction: np.ndarray) -> np.ndarray:
+    """`facing toward`: the yaw turning local +y toward the direction's horizontal part, none when it
+    has none (orientation.rotation_from and rotations.yaw_toward)."""
+    flat = np.hypot(direction[:, 0], direction[:, 1]) == 0.0
+    return _yaws(np.where(flat, 0.0, np.arctan2(-direction[:, 0], direction[:, 1])))
+
+
+def _yaws(yaw: np.ndarray) -> np.ndarray:
+    """Rotations about z by each yaw (rotations.rot_z), (n, 3, 3)."""
+    n = len(yaw)
     c, s = np.cos(yaw), np.sin(yaw)
     out = np.zeros((n, 3, 3))
     out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1], out[:, 2, 2] = c, -s, s, c, 1.0
@@ -193,6 +207,16 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
             return np.broadcast_to(region.point, (n, 3)), valid
         assert region.sampler is not None
         return region.sampler.points(u), valid
+    if region.at is not None:
+        assert region.rows is not None
+        point = np.array(np.broadcast_to(region.at.fn(state), (n, 3)))
+        rows = region.rows
+        valid = np.all(point @ rows.A.T - rows.b <= TOL * np.maximum(np.linalg.norm(rows.A, axis=1), 1.0), axis=1)
+        if len(rows.d):
+            valid &= np.all(np.abs(point @ rows.C.T - rows.d) <= TOL * np.maximum(np.linalg.norm(rows.C, axis=1), 1.0), axis=1)
+        return point, valid
+    if region.plane is not None:
+        return _on_plane(region, name, state, u)
     assert region.anchor is not None
     if region.affine is not None:
         return _affine_points(region.affine, state.positions[region.anchor], u)
@@ -221,6 +245,28 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
     else:
         x, y = (2.0 * u[:, 0] - 1.0) * hx, (2.0 * u[:, 1] - 1.0) * hy
     return pos + x[:, None] * rot[:, :, 0] + y[:, None] * rot[:, :, 1] + lift[:, None] * rot[:, :, 2], valid
+
+
+def _on_plane(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points uniform on a fixed plane's polygon, shrunk by each candidate's footprint, cut per candidate."""
+    plane = region.plane
+    assert plane is not None
+    n = len(u)
+    rotation, half = state.rotations[name], state.dims[name] * 0.5
+    lift = support(np.broadcast_to(plane.normal, (n, 1, 3)), rotation, half)[:, 0]  # rest on the plane
+    across = plane.a @ plane.normal  # the rows' part along the normal: lifting p does not move it in the plane
+    gamma = np.broadcast_to(plane.b - plane.offset * across, (n, len(plane.b)))
+    if plane.completely:
+        in_plane = plane.a - np.outer(across, plane.normal)
+        gamma = gamma - support(np.broadcast_to(in_plane, (n,) + in_plane.shape), rotation, half)
+    rows = [np.stack([np.broadcast_to(plane.a @ plane.basis[:, 0], gamma.shape),
+                      np.broadcast_to(plane.a @ plane.basis[:, 1], gamma.shape), gamma], axis=2)]
+    origin = (plane.offset + lift)[:, None] * plane.normal
+    for cut in region.cuts:
+        a, b = cut(state)
+        rows.append(np.stack([a @ plane.basis[:, 0], a @ plane.basis[:, 1], b - np.einsum("nmi,ni->nm", a, origin)], axis=2))
+    xy, valid = polygon_points(np.concatenate(rows, axis=1), u)
+    return origin + xy @ plane.basis.T, valid
 
 
 def _affine_points(rows: AffineRows, anchor: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -25,11 +25,13 @@ TRAY = REPO / "tests" / "sampling" / "data" / "tray_four_cubes.prs"
 
 
 def test_which_specs_candidate_rounds_draw():
-    """Random sizes and yaws in a container and on a tray are drawn by candidates; a facing-toward is not."""
+    """Random sizes and yaws in a container and on a tray, `facing toward` from a fixed region or a random
+    `at` point are drawn by candidates; `visible from` is not."""
     assert compile_sampler(BIN).candidates
     assert compile_sampler(TRAY).candidates
-    toward = compile_sampler(REPO / "specs" / "facing_toward.prs")
-    assert not toward.candidates and "depends on its position" in toward.no_candidates_because
+    assert compile_sampler(REPO / "specs" / "facing_toward.prs").candidates
+    view = compile_sampler(REPO / "specs" / "camera_view.prs")
+    assert not view.candidates and "`visible` rule" in view.no_candidates_because
     assert not compile_sampler(BIN, law="sequential").candidates  # only the joint law
     assert not compile_sampler(BIN, batched=False).candidates  # one scene at a time: Gibbs sweeps
 
