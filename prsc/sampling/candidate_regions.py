@@ -101,6 +101,7 @@ class Region:
             return self.sampler.dim + 1
         return 3 if self.cuts or self.plane is not None else 2
 
+
 @dataclass(frozen=True)
 class Placed:
     """What the plan knows of the objects before the one being planned."""
@@ -109,8 +110,9 @@ class Placed:
     bounds: dict[str, tuple[np.ndarray, np.ndarray]]  # bounds of the centre in every candidate
     reaches: dict[str, float]  # bound of the box's half diagonal
 
+
 def object_region(rt: ObjectRuntime, placed: Placed, reach: float, compiler: CandidateCompiler
-            ) -> tuple[Region, np.ndarray, np.ndarray]:
+                  ) -> tuple[Region, np.ndarray, np.ndarray]:
     """The object's region as candidates draw it, and bounds of its centre in every candidate."""
     provider, name = rt.provider, rt.plan.name
     try:
@@ -333,6 +335,7 @@ def _cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompi
 
     return direction
 
+
 def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:
     """The container floor `on`/`in` the carrier means (specifiers.rows_on), or None: its top face."""
     plan = carrier.plan
@@ -345,5 +348,7 @@ def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:
         raise Unbatchable(f"`in {plan.name}`, which is no container")  # the scalar sampler explains it
     return interior
 
+
 def corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The 8 corners (8, 3) of the box [lo, hi]."""
     return np.array([[(lo, hi)[i >> k & 1][k] for k in range(3)] for i in range(8)], dtype=float)

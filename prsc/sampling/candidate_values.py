@@ -18,7 +18,7 @@ import numpy as np
 
 from prsc.ir import model as ir
 from prsc.ir.program import Program
-from prsc.sampling.batch_values import BatchCompiler, BatchState, BatchValue, Unbatchable, _const, _memoised, draw_site
+from prsc.sampling.batch_values import BatchCompiler, BatchState, BatchValue, Unbatchable, _memoised, draw_site
 from prsc.sampling.counter_stream import uniforms
 
 _DIMENSIONS = ("width", "length", "height")
@@ -26,8 +26,8 @@ _COMPARE: dict[str, Callable[[Any, Any], Any]] = {
     "<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge, "==": operator.eq, "!=": operator.ne,
 }
 _UNIT = (np.zeros(1), np.ones(1))  # the bounds of a boolean
-# Functions of numbers as the scalar evaluator has them (prsc/constraints/evaluate.py), with
-# bounds valid for any argument bounds (None: the argument's own bounds do not give one cheaply).
+# Functions of numbers as the scalar evaluator has them (prsc/constraints/evaluate.py); their
+# bounds come from the arguments' (_call_bounds). tan and atan2 are not vectorised here.
 _FUNCTIONS: dict[str, Callable[..., np.ndarray]] = {
     "abs": np.abs, "hypot": np.hypot, "sqrt": np.sqrt, "min": np.minimum, "max": np.maximum,
     "sin": np.sin, "cos": np.cos,
@@ -183,13 +183,3 @@ def _call_bounds(func: str, args: list[BatchValue]) -> tuple[np.ndarray, np.ndar
         return np.zeros(1), top
     pick = np.minimum if func == "min" else np.maximum
     return pick(args[0].lo, args[1].lo), pick(args[0].hi, args[1].hi)
-
-
-def constant_value(value: BatchValue) -> Any:
-    """The value as a plain float or (3,) array when it is the same in every candidate, else None."""
-    if value.constant is None:
-        return None
-    return value.constant if value.vector else float(value.constant[0])
-
-
-__all__ = ["CandidateCompiler", "CandidateState", "Unbatchable", "constant_value", "_const"]
