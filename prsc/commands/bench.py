@@ -90,7 +90,7 @@ def measure(
         stats.scenes = done
         if time.process_time() - cpu0 > seconds:
             break
-    step = CHUNK if sampler.candidates else 1  # candidate rounds draw a chunk of scenes at once
+    step = CHUNK if sampler.chunked else 1  # candidate rounds and vectorised sweeps draw a chunk at once
     for first in range(0, n, step) if not sampler.batched else ():
         chunk = range(first, min(first + step, n))
         for index, result in zip(chunk, sampler.results(seed, chunk)):

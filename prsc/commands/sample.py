@@ -62,7 +62,7 @@ def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> A
             total.scenes += n
             return total
         # Candidate rounds draw many scenes at once too (candidates.py); otherwise one at a time.
-        step = CHUNK if sampler.candidates else 1
+        step = CHUNK if sampler.chunked else 1
         for first in range(start, start + n, step):
             chunk = range(first, min(first + step, start + n))
             for index, result in zip(chunk, sampler.results(seed, chunk)):

@@ -23,6 +23,7 @@ from prsc.sampling.batched import BatchedSampler, batch_plan
 from prsc.sampling.candidate_plan import candidate_plan
 from prsc.sampling.candidates import CandidateSampler, Drawn
 from prsc.sampling.gibbs import DEFAULT_SWEEPS
+from prsc.sampling.group_gibbs import SWEEPS as GROUP_SWEEPS, GroupGibbs, group_plan
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
 from prsc.sampling.proposal import Proposal
 from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
@@ -107,6 +108,8 @@ class Sampler:
         # The joint law of a spec that does not batch: whole-scene rejection vectorised over
         # candidates (candidates.py), Gibbs sweeps for the scenes where no candidate passes.
         self._planned: CandidateSampler | None = None
+        self._group: GroupGibbs | None = None  # a packed spec's sweeps over many scenes, when the pilot fails
+        self._sweeps = sweeps
         self._paying: bool | None = None  # whether candidate rounds pay: decided by a pilot on first use
         self.no_candidates_because = "" if self._batch is not None else "not the joint law of the exact sampler"
         if self._batch is None and batched and isinstance(self._engine, SequentialSampler) and sampler == "exact" \
@@ -128,7 +131,24 @@ class Sampler:
             self._paying = self._planned.pays()
             if not self._paying:
                 self.no_candidates_because = "too few candidates pass (a pilot of 8 scenes found fewer than 4)"
+                # A packed spec of fixed boxes: the Gibbs sweeps vectorised over scenes (group_gibbs.py).
+                try:
+                    objects = group_plan(self._planned.plan, self._planned.runtimes)
+                    sweeps = max(GROUP_SWEEPS, self._sweeps)
+                    self._group = GroupGibbs(objects, self.constraints, self._planned.runtimes, sweeps)
+                except Unbatchable as reason:
+                    self.no_candidates_because += f"; Gibbs sweeps one scene at a time: {reason}"
         return self._planned if self._paying else None
+
+    @property
+    def gibbs_rounds(self) -> bool:
+        """Whether the joint law is drawn by Gibbs sweeps vectorised over scenes (group_gibbs.py)."""
+        return self._candidates is None and self._group is not None
+
+    @property
+    def chunked(self) -> bool:
+        """Whether `results` draws many scenes at once (candidate rounds or vectorised Gibbs sweeps)."""
+        return self._candidates is not None or self._group is not None
 
     @property
     def candidates(self) -> bool:
@@ -157,6 +177,8 @@ class Sampler:
     def results(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
         """Scenes `indices` under `seed` with their statistics (an unbatched spec; candidate rounds at once)."""
         if self._candidates is None:
+            if self._group is not None:
+                return self._group.draw(seed, indices)
             return [self._engine.sample(seed, index) for index in indices]
         return [self._settle(drawn, seed, index) for drawn, index in zip(self._candidates.draw(seed, indices), indices)]
 
@@ -199,15 +221,20 @@ class Sampler:
         drawn: dict[int, Any] = {}  # index -> scene JSON (batched) or a candidate round's Drawn
 
         def scene(index: int) -> dict[str, Any]:
-            if self._batch is None and self._candidates is None:
+            if self._batch is None and not self.chunked:
                 return self.scene(seed, index)
             if index not in drawn:
                 drawn.clear()
-                # Candidate rounds take 16 ahead: a worker asked for a few scenes draws few more.
+                # Candidate rounds and sweeps take 16 ahead: a worker asked for a few scenes draws few more.
                 chunk = range(index, index + (ahead if self._batch is not None else min(ahead, 16)))
-                # Candidate rounds hand over results, each made JSON (or its error raised) only when asked for:
-                # a scene that cannot be written does not take the scenes before it in the chunk with it.
-                drawn.update(zip(chunk, self.batch(seed, chunk) if self._batch is not None else self._candidates.draw(seed, chunk)))
+                # They hand over results, each made JSON (or its error raised) only when asked for: a scene
+                # that cannot be written does not take the scenes before it in the chunk with it.
+                if self._batch is not None:
+                    drawn.update(zip(chunk, self.batch(seed, chunk)))
+                elif self._candidates is not None:
+                    drawn.update(zip(chunk, self._candidates.draw(seed, chunk)))
+                else:
+                    drawn.update(zip(chunk, self.results(seed, chunk)))
             value = drawn.pop(index)
             return value if self._batch is not None else self.to_json(self._settle(value, seed, index), seed, index)
 
@@ -227,7 +254,7 @@ class Sampler:
     def scenes(self, seed: int, indices: Iterable[int] | int, start: int = 0) -> Iterator[dict[str, Any]]:
         """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily, in batches."""
         chosen = range(start, start + indices) if isinstance(indices, int) else indices
-        if self._batch is None and self._candidates is None:
+        if self._batch is None and not self.chunked:
             for index in chosen:
                 yield self.scene(seed, index)
             return
