@@ -103,6 +103,9 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
         out.append("drawn in batches (docs/sampling.md, \"Batched sampling\")")
     elif sampler.candidates:
         out.append("drawn by candidate rounds, Gibbs sweeps where none passes (docs/sampling.md, \"Candidate rounds\")")
+    elif sampler.gibbs_rounds:
+        out.append("drawn by Gibbs rounds, the sweeps vectorised over scenes (docs/sampling.md, \"Gibbs rounds\"): "
+                   + sampler.no_candidates_because)
     else:
         out.append(f"drawn one scene at a time: {sampler.unbatched_because}"
                    + (f"; Gibbs sweeps, not candidate rounds: {sampler.no_candidates_because}" if sampler.law == "joint" else ""))
