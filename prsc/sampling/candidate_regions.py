@@ -33,7 +33,9 @@ from prsc.geometry.container import Interior
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
+from prsc.constraints.visibility import camera_frustum
 from prsc.ir import model as ir
+from prsc.ir.models import model_of
 from prsc.sampling.batch_values import BatchValue, Unbatchable
 from prsc.sampling.batched import rows_hold
 from prsc.sampling.candidate_rules import constant_region, constant_value_of, support
@@ -310,6 +312,8 @@ def _cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompi
             return np.broadcast_to(a, (n,) + a.shape), np.broadcast_to(b + shift, (n, len(b)))
 
         return fixed
+    if rule.kind == "visible":
+        return _visible(rule, me, placed)
     if rule.kind != "direction":
         raise Unbatchable(f"{me}'s `{rule.kind}` rule")
     target = rule.args[0]
@@ -334,6 +338,33 @@ def _cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompi
         return np.stack([-n, n], axis=1), np.stack([-low, base + up_to.fn(state)[:, 0]], axis=1)
 
     return direction
+
+
+def _visible(rule: Rule, me: str, placed: Placed) -> Cut:
+    """`visible from C`: a.p <= b - s(a) for the six planes of C's frustum, placed where C is in each
+    candidate (visibility.rows_visible); C's size and camera properties are the same in every scene."""
+    target = rule.args[0]
+    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
+        raise Unbatchable(f"{me} is visible from something other than an object placed before it")
+    camera = placed.runtimes[target.name]
+    plan = camera.plan
+    if camera.dims is None or set(plan.property_fns) - set(plan.static_props):
+        raise Unbatchable(f"{plan.name}'s size or camera properties change between scenes")
+    value = ObjectValue(plan.name, plan.class_name, plan.span, None, None, camera.dims, dict(plan.static_props), plan.property_fns)
+    if not (value.props.get("camera") or model_of(value.props, value.class_name) == "camera"):
+        raise Unbatchable(f"{plan.name} is no camera")  # the scalar sampler explains it
+    try:
+        a_local, b_local = camera_frustum(value, plan.span).local_rows()
+    except PrscError:
+        raise Unbatchable(f"{plan.name}'s frustum is not valid") from None
+    name = plan.name
+
+    def visible(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
+        a = np.einsum("mj,nij->nmi", a_local, state.rotations[name])  # a R^T per candidate (Frustum.world_rows)
+        b = b_local + np.einsum("nmi,ni->nm", a, state.positions[name])
+        return a, b - support(a, state.rotations[me], state.dims[me] * 0.5)
+
+    return visible
 
 
 def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:

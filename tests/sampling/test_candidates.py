@@ -26,12 +26,13 @@ TRAY = REPO / "tests" / "sampling" / "data" / "tray_four_cubes.prs"
 
 def test_which_specs_candidate_rounds_draw():
     """Random sizes and yaws in a container and on a tray, `facing toward` from a fixed region or a random
-    `at` point are drawn by candidates; `visible from` is not."""
+    `at` point, `visible from` a camera are drawn by candidates; `stably on` is not."""
     assert compile_sampler(BIN).candidates
     assert compile_sampler(TRAY).candidates
     assert compile_sampler(REPO / "specs" / "facing_toward.prs").candidates
-    view = compile_sampler(REPO / "specs" / "camera_view.prs")
-    assert not view.candidates and "`visible` rule" in view.no_candidates_because
+    assert compile_sampler(REPO / "specs" / "camera_view.prs").candidates
+    stack = compile_sampler(REPO / "specs" / "stack_and_cube.prs")
+    assert not stack.candidates and "stably" in stack.no_candidates_because
     assert not compile_sampler(BIN, law="sequential").candidates  # only the joint law
     assert not compile_sampler(BIN, batched=False).candidates  # one scene at a time: Gibbs sweeps
 
