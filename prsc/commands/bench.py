@@ -71,7 +71,6 @@ def measure(
     """Sample up to n scenes (or `seconds` of CPU time): rates, rejections, memory, positions.
     A batched spec is drawn in batches (`batched=False`: one scene at a time, from per-scene Generators)."""
     from prsc.sampling import compile_sampler
-    from prsc.sampling.candidates import CHUNK
     from prsc.sampling.mixing import coordinates
     from prsc.sampling.sampler import BATCH
     from prsc.sampling.stats import RejectionStats
@@ -90,14 +89,11 @@ def measure(
         stats.scenes = done
         if time.process_time() - cpu0 > seconds:
             break
-    step = CHUNK if sampler.chunked else 1  # candidate rounds and vectorised sweeps draw a chunk at once
-    for first in range(0, n, step) if not sampler.batched else ():
-        chunk = range(first, min(first + step, n))
-        for index, result in zip(chunk, sampler.results(seed, chunk)):
-            sampler.to_json(result, seed, index)
-            stats.merge(result.stats)
-            positions.append(coordinates(result).tolist())
-        done += len(chunk)
+    for index, result in sampler.each_result(seed, range(n)) if not sampler.batched else ():
+        sampler.to_json(result, seed, index)
+        stats.merge(result.stats)
+        positions.append(coordinates(result).tolist())
+        done += 1
         if time.process_time() - cpu0 > seconds:
             break
     cpu = max(time.process_time() - cpu0, 1e-9)

@@ -41,7 +41,6 @@ def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> A
     from contextlib import nullcontext
 
     from prsc.commands.progress import progress_bar
-    from prsc.sampling.candidates import CHUNK
     from prsc.sampling.sampler import BATCH
     from prsc.sampling.scene_text import scene_encoder
     from prsc.sampling.stats import RejectionStats
@@ -61,16 +60,12 @@ def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> A
                     bar.advance(task, len(chunk))
             total.scenes += n
             return total
-        # Candidate rounds draw many scenes at once too (candidates.py); otherwise one at a time.
-        step = CHUNK if sampler.chunked else 1
-        for first in range(start, start + n, step):
-            chunk = range(first, min(first + step, start + n))
-            for index, result in zip(chunk, sampler.results(seed, chunk)):
-                total.merge(result.stats)
-                out.write(dumps(sampler.to_json(result, seed, index)))
-                out.write("\n")
+        for index, result in sampler.each_result(seed, range(start, start + n)):
+            total.merge(result.stats)
+            out.write(dumps(sampler.to_json(result, seed, index)))
+            out.write("\n")
             if bar:
-                bar.advance(task, len(chunk))
+                bar.advance(task)
     return total
 
 

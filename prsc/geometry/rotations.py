@@ -44,6 +44,15 @@ def rot_z(angle: float) -> NDArray[np.float64]:
 yaw_matrix = rot_z
 
 
+def yaw_matrices(yaw: NDArray[np.float64]) -> NDArray[np.float64]:
+    """`rot_z` of each yaw (n,): rotations (n, 3, 3)."""
+    n = len(yaw)
+    c, s = np.cos(yaw), np.sin(yaw)
+    out = np.zeros((n, 3, 3))
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1], out[:, 2, 2] = c, -s, s, c, 1.0
+    return out
+
+
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
     """Unit quaternion(s) (..., 4) in w, x, y, z order to rotation matrices (..., 3, 3)."""
     q = np.asarray(q, dtype=float)
@@ -100,6 +109,21 @@ def matrix_to_quat(m: ArrayLike) -> NDArray[np.float64]:
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     q[q[:, 0] < 0] *= -1.0
     return q.reshape(batch + (4,))
+
+
+def matrix_to_quat_one(r: list[list[float]]) -> list[float]:
+    """`matrix_to_quat` of one matrix (rows as lists) in plain floats: the same pivots and bits; a numpy
+    call per object cost more than the rest of a candidate scene's JSON."""
+    diag = [r[0][0] + r[1][1] + r[2][2], r[0][0] - r[1][1] - r[2][2], -r[0][0] + r[1][1] - r[2][2], -r[0][0] - r[1][1] + r[2][2]]
+    pivot = max(range(4), key=diag.__getitem__)
+    s = math.sqrt(max(1.0 + diag[pivot], 0.0)) * 2.0
+    d21, d02, d10 = r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]
+    s01, s02, s12 = r[0][1] + r[1][0], r[0][2] + r[2][0], r[1][2] + r[2][1]
+    q = ([s / 4, d21 / s, d02 / s, d10 / s], [d21 / s, s / 4, s01 / s, s02 / s],
+         [d02 / s, s01 / s, s / 4, s12 / s], [d10 / s, s02 / s, s12 / s, s / 4])[pivot]
+    norm = math.sqrt(sum(v * v for v in q))
+    sign = -1.0 if q[0] / norm < 0 else 1.0
+    return [sign * v / norm for v in q]
 
 
 def compat_euler_to_matrix(a: float, b: float, c: float) -> NDArray[np.float64]:

@@ -34,7 +34,7 @@ from prsc.geometry.sampler import UniformSampler
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchCompiler, BatchState, BatchValue, Unbatchable
 from prsc.geometry.obb import collides_many
-from prsc.sampling.collisions import CONTACT_TOL, PlacedBox, near, obstacles_for
+from prsc.sampling.collisions import CONTACT_TOL, PlacedBox, apart, near, obstacles_for
 from prsc.sampling.counter_stream import scene_keys, uniforms
 from prsc.sampling.prepared import TOL, Prepared
 from prsc.sampling.runtime import ObjectRuntime
@@ -177,15 +177,22 @@ def _anchored(rt: ObjectRuntime, placed: dict[str, BatchObject]) -> BatchObject:
         raise Unbatchable(f"{name}'s region carried by {anchor} is cut by its static rows")
     if prepared.sampler is None:
         raise Unbatchable(f"{name}'s region carried by {anchor} is a point")
-    own = _corners(prepared.sampler)
-    carried = (placed[anchor].corners[:, None, :] + own[None, :, :]).reshape(-1, 3)
-    static = provider.static_rows
-    # With twice the sequential sampler's margin (regions.RegionProvider._anchored_region): its
-    # test on one scene's rounded numbers then passes too.
-    if static is not None and not rows_hold(static, carried, margin=2 * TOL):
+    carried = carried_corners(prepared.sampler, placed[anchor].corners, provider.static_rows)
+    if carried is None:
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
     return BatchObject(name, rt.rotation, rt.half, rt.reach, carried, region=prepared.sampler,  # type: ignore[arg-type]
                        anchor=anchor, prepared=prepared)
+
+
+def carried_corners(region: UniformSampler, anchors: np.ndarray, static: Polytope | None) -> np.ndarray | None:
+    """Points whose hull holds a region carried by an anchor whose centre lies in the hull of `anchors`,
+    or None when the static rows may cut it somewhere there."""
+    carried = (anchors[:, None, :] + _corners(region)[None, :, :]).reshape(-1, 3)
+    # With twice the sequential sampler's margin (regions.RegionProvider._anchored_region): its
+    # test on one scene's rounded numbers then passes too.
+    if static is not None and not rows_hold(static, carried, margin=2 * TOL):
+        return None
+    return carried
 
 
 def _separated(item: BatchObject, placed: list[BatchObject], rt: ObjectRuntime,
@@ -199,9 +206,7 @@ def _separated(item: BatchObject, placed: list[BatchObject], rt: ObjectRuntime,
     for j, other in enumerate(placed):
         if runtimes[j].allow_static or j in rt.plan.rests_in or other.name in item.avoids:
             continue
-        ej, rk = np.array(other.reach), np.array(item.reach)
-        apart = (other.hi + ej - CONTACT_TOL <= item.lo - rk) | (other.lo - ej + CONTACT_TOL >= item.hi + rk)
-        if apart.any():
+        if apart(other.lo, other.hi, other.reach, item.lo, item.hi, item.reach):
             continue
         if other.fixed is None or item.anchor is None:
             raise Unbatchable(f"{item.name} and {other.name} may touch")

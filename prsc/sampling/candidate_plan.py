@@ -16,12 +16,12 @@ import numpy as np
 
 from prsc.constraints.model import ConstraintProgram
 from prsc.constraints.values import DIMENSIONS
-from prsc.geometry.obb import CONTACT_TOL
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable, _const
 from prsc.sampling.candidate_regions import Placed, Region, object_region
 from prsc.sampling.candidate_rules import Test
 from prsc.sampling.candidate_values import CandidateCompiler
+from prsc.sampling.collisions import apart
 from prsc.sampling.runtime import ObjectRuntime
 
 
@@ -84,7 +84,7 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
         compiler_bounds[name] = (lo, hi, None)
         obstacles = () if rt.allow_static else tuple(
             other.name for j, other in enumerate(objects)
-            if not runtimes[j].allow_static and j not in plan.rests_in and not _apart(placed, name, other.name)
+            if not runtimes[j].allow_static and j not in plan.rests_in and not apart(*placed.bounds[name], placed.reaches[name], *placed.bounds[other.name], placed.reaches[other.name])
         )
         objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles, toward))
         requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
@@ -156,10 +156,3 @@ def _require_test(compiler: CandidateCompiler, condition: ir.Expr, soft: int | N
     if soft is None:
         return lambda state: np.broadcast_to(fn(state)[:, 0] != 0.0, (len(state.keys),))
     return lambda state: (fn(state)[:, 0] != 0.0) | ~state.active[:, soft]  # type: ignore[index]
-
-
-def _apart(placed: Placed, a: str, b: str) -> bool:
-    """Whether two objects' boxes are apart in every candidate (their centres' bounds and sizes)."""
-    (lo_a, hi_a), (lo_b, hi_b) = placed.bounds[a], placed.bounds[b]
-    gap = placed.reaches[a] + placed.reaches[b] - CONTACT_TOL
-    return bool(np.any(hi_a + gap <= lo_b) or np.any(hi_b + gap <= lo_a))

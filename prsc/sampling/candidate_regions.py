@@ -37,10 +37,9 @@ from prsc.constraints.visibility import camera_frustum
 from prsc.ir import model as ir
 from prsc.ir.models import model_of
 from prsc.sampling.batch_values import BatchValue, Unbatchable
-from prsc.sampling.batched import rows_hold
+from prsc.sampling.batched import carried_corners, rows_hold
 from prsc.sampling.candidate_rules import constant_region, constant_value_of, support
 from prsc.sampling.candidate_values import CandidateCompiler, CandidateState
-from prsc.sampling.prepared import TOL
 from prsc.sampling.runtime import ObjectRuntime
 
 # Rows a.p <= b of each candidate on its own centre: (a (n, m, 3), b (n, m)).
@@ -149,19 +148,15 @@ def _point(rt: ObjectRuntime, compiler: CandidateCompiler) -> tuple[Region, np.n
 
 
 def _carried(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.ndarray]:
-    """A region translated with an earlier object, which the static rows never cut (batched._anchored)."""
+    """A region translated with an earlier object, which the static rows never cut (batched.carried_corners)."""
     provider, name = rt.provider, rt.plan.name
     anchor = provider.plan.anchor
     provider.fixed_bounds()
     prepared = provider.anchored_prepared
     if prepared is None or prepared.sampler is None or anchor not in placed.bounds:
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut, or is a point")
-    own = np.unique(prepared.sampler.vertices(), axis=0)
-    lo_a, hi_a = placed.bounds[anchor]
-    anchors = corners(lo_a, hi_a)
-    carried = (anchors[:, None, :] + own[None, :, :]).reshape(-1, 3)
-    static = provider.static_rows
-    if static is not None and (len(static.d) or not rows_hold(static, carried, 2 * TOL)):
+    carried = carried_corners(prepared.sampler, corners(*placed.bounds[anchor]), provider.static_rows)
+    if carried is None:
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
     return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
 

@@ -28,12 +28,13 @@ from prsc.constraints.context import SceneContext
 from prsc.constraints.model import ConstraintProgram
 from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
-from prsc.geometry.obb import CONTACT_TOL, pair_overlaps, upright_overlaps
 from prsc.geometry.polygon import polygon_points
+from prsc.geometry.rotations import yaw_matrices
 from prsc.sampling.candidate_plan import CandidateObject, CandidatePlan
 from prsc.sampling.candidate_regions import AffineRows, Region
 from prsc.sampling.candidate_rules import support
 from prsc.sampling.candidate_values import CandidateState
+from prsc.sampling.collisions import collide_pairs
 from prsc.sampling.counter_stream import candidate_keys, scene_keys, uniforms
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.prepared import TOL
@@ -86,17 +87,18 @@ class CandidateSampler:
         size = self._first_round()
         while len(pending) and first < BUDGET:
             size = min(size, BUDGET - first)
-            state, ok = self.evaluate(candidate_keys(keys[pending], first, size), np.repeat(keys[pending], size))
+            state, ok = self.evaluate(candidate_keys(keys[pending], first, size), keys[pending])
             ok = ok.reshape(len(pending), size)
             passed = ok.any(axis=1)
-            rows = np.flatnonzero(passed) * size + ok.argmax(axis=1)[passed]
-            for scene, row, tried in zip(pending[passed], rows, ok.argmax(axis=1)[passed]):
+            tried = ok.argmax(axis=1)[passed]  # each passing scene's first passing candidate in this round
+            rows = np.flatnonzero(passed) * size + tried
+            for scene, row, tried_before in zip(pending[passed], rows, tried):
                 try:
-                    results[scene] = self._result(state, int(row), seed, indices[scene], first + int(tried))
+                    results[scene] = self._result(state, int(row), seed, indices[scene], first + int(tried_before))
                 except PrscError as error:  # a property this scene cannot have: reported when the scene is asked for
                     results[scene] = error
             self._kept += int(passed.sum())
-            self._needed += int((first + ok.argmax(axis=1)[passed] + 1).sum())
+            self._needed += int((first + tried + 1).sum())
             pending = pending[~passed]
             first += size
             size = min(2 * size, 2 * FIRST_ROUND[1])
@@ -107,7 +109,7 @@ class CandidateSampler:
         passing candidate within BUDGET (a function of the spec alone, so every run decides the same)."""
         for size in (16, BUDGET):  # most specs decide on the small pilot
             keys = scene_keys(PILOT_SEED, np.arange(PILOT_SCENES, dtype=np.uint64))
-            _, ok = self.evaluate(candidate_keys(keys, 0, size), np.repeat(keys, size))
+            _, ok = self.evaluate(candidate_keys(keys, 0, size), keys)
             if 2 * int(ok.reshape(PILOT_SCENES, size).any(axis=1).sum()) >= PILOT_SCENES:
                 return True
         return False
@@ -118,14 +120,16 @@ class CandidateSampler:
         return int(min(max(1.5 * mean, FIRST_ROUND[0]), FIRST_ROUND[1]))
 
     def evaluate(self, keys: np.ndarray, scenes: np.ndarray) -> tuple[CandidateState, np.ndarray]:
-        """Every candidate of `keys` (of scene keys `scenes`) drawn and tested: (its state, which passed)."""
+        """Every candidate of `keys` drawn and tested: (its state, which passed). `scenes`: the keys of
+        their scenes, each scene's candidates consecutive."""
         state = CandidateState(keys)
         n = len(keys)
         ok = np.ones(n, dtype=bool)
         if len(self.plan.soft):
             # Which soft requires a scene enforces is drawn once per scene, as the sequential sampler
             # does: `require[p]` holds in a fraction p of scenes, whatever its candidates did.
-            state.active = uniforms(scenes, self._soft_site, len(self.plan.soft)) < self.plan.soft
+            active = uniforms(scenes, self._soft_site, len(self.plan.soft)) < self.plan.soft
+            state.active = np.repeat(active, n // len(scenes), axis=0)
         for test in self._after.get(-1, ()):
             ok &= test(state)
         for k, item in enumerate(self.plan.objects):
@@ -179,23 +183,14 @@ class CandidateSampler:
 def _rotations(item: CandidateObject, state: CandidateState, n: int) -> np.ndarray:
     if item.yaw is None:
         return np.broadcast_to(item.rotation, (n, 3, 3))
-    return _yaws(np.broadcast_to(item.yaw.fn(state), (n, 1))[:, 0])
+    return yaw_matrices(np.broadcast_to(item.yaw.fn(state), (n, 1))[:, 0])
 
 
 def _facing(direction: np.ndarray) -> np.ndarray:
     """`facing toward`: the yaw turning local +y toward the direction's horizontal part, none when it
     has none (orientation.rotation_from and rotations.yaw_toward)."""
     flat = np.hypot(direction[:, 0], direction[:, 1]) == 0.0
-    return _yaws(np.where(flat, 0.0, np.arctan2(-direction[:, 0], direction[:, 1])))
-
-
-def _yaws(yaw: np.ndarray) -> np.ndarray:
-    """Rotations about z by each yaw (rotations.rot_z), (n, 3, 3)."""
-    n = len(yaw)
-    c, s = np.cos(yaw), np.sin(yaw)
-    out = np.zeros((n, 3, 3))
-    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1], out[:, 2, 2] = c, -s, s, c, 1.0
-    return out
+    return yaw_matrices(np.where(flat, 0.0, np.arctan2(-direction[:, 0], direction[:, 1])))
 
 
 def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -232,19 +227,26 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
         valid = (hx >= 0.0) & (hy >= 0.0)  # the footprint does not fit: an empty region, never drawn
     lift = s[:, 2] + (region.interior.floor_top if region.interior is not None else state.dims[region.anchor][:, 2] * 0.5)
     if region.cuts:
-        # Each cut a.p <= b on p = pos + x u + y v + lift up is a half-plane in (x, y).
-        rows = [(np.full(n, 1.0), np.zeros(n), hx), (np.full(n, -1.0), np.zeros(n), hx),
-                (np.zeros(n), np.full(n, 1.0), hy), (np.zeros(n), np.full(n, -1.0), hy)]
-        for cut in region.cuts:
-            a, b = cut(state)
-            across = b - np.einsum("nmi,ni->nm", a, pos + lift[:, None] * rot[:, :, 2])
-            along_x, along_y = np.einsum("nmi,ni->nm", a, rot[:, :, 0]), np.einsum("nmi,ni->nm", a, rot[:, :, 1])
-            rows += [(along_x[:, j], along_y[:, j], across[:, j]) for j in range(a.shape[1])]
-        xy, inside = polygon_points(np.stack([np.stack(r, axis=1) for r in rows], axis=1), u)
+        edges = [(np.full(n, 1.0), np.zeros(n), hx), (np.full(n, -1.0), np.zeros(n), hx),
+                 (np.zeros(n), np.full(n, 1.0), hy), (np.zeros(n), np.full(n, -1.0), hy)]
+        rows = [np.stack([np.stack(edge, axis=1) for edge in edges], axis=1)]
+        rows += _cut_rows(region, state, pos + lift[:, None] * rot[:, :, 2], rot[:, :, 0], rot[:, :, 1])
+        xy, inside = polygon_points(np.concatenate(rows, axis=1), u)
         x, y, valid = xy[:, 0], xy[:, 1], valid & inside
     else:
         x, y = (2.0 * u[:, 0] - 1.0) * hx, (2.0 * u[:, 1] - 1.0) * hy
     return pos + x[:, None] * rot[:, :, 0] + y[:, None] * rot[:, :, 1] + lift[:, None] * rot[:, :, 2], valid
+
+
+def _cut_rows(region: Region, state: CandidateState, origin: np.ndarray, e1: np.ndarray, e2: np.ndarray) -> list[np.ndarray]:
+    """The region's cuts a.p <= b on p = origin + x e1 + y e2 as half-planes (alpha, beta, gamma) in (x, y),
+    (n, m, 3) each; e1, e2 per candidate (n, 3) or the same for all (3,)."""
+    out = []
+    for cut in region.cuts:
+        a, b = cut(state)
+        along = [a @ e if e.ndim == 1 else np.einsum("nmi,ni->nm", a, e) for e in (e1, e2)]
+        out.append(np.stack([along[0], along[1], b - np.einsum("nmi,ni->nm", a, origin)], axis=2))
+    return out
 
 
 def _on_plane(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -262,9 +264,7 @@ def _on_plane(region: Region, name: str, state: CandidateState, u: np.ndarray) -
     rows = [np.stack([np.broadcast_to(plane.a @ plane.basis[:, 0], gamma.shape),
                       np.broadcast_to(plane.a @ plane.basis[:, 1], gamma.shape), gamma], axis=2)]
     origin = (plane.offset + lift)[:, None] * plane.normal
-    for cut in region.cuts:
-        a, b = cut(state)
-        rows.append(np.stack([a @ plane.basis[:, 0], a @ plane.basis[:, 1], b - np.einsum("nmi,ni->nm", a, origin)], axis=2))
+    rows += _cut_rows(region, state, origin, plane.basis[:, 0], plane.basis[:, 1])
     xy, valid = polygon_points(np.concatenate(rows, axis=1), u)
     return origin + xy @ plane.basis.T, valid
 
@@ -292,19 +292,10 @@ def _affine_points(rows: AffineRows, anchor: np.ndarray, u: np.ndarray) -> tuple
 
 
 def _collide(state: CandidateState, a: str, b: str, rows: np.ndarray, upright: bool) -> np.ndarray:
-    """Which of the candidates `rows` have boxes of a and b that collide (collisions.first_hit's test:
-    broad phase, then SAT; `upright`: both boxes only yaw, so 5 of the 15 axes decide)."""
-    pa, pb = state.positions[a][rows], state.positions[b][rows]
-    reach = state.reaches[a][rows] + state.reaches[b][rows] - CONTACT_TOL
-    close = np.flatnonzero(np.all(np.abs(pa - pb) < reach, axis=1))
-    hit = np.zeros(len(rows), dtype=bool)
-    if len(close):
-        picked = rows[close]
-        ra, ha = state.rotations[a][picked], state.dims[a][picked] * 0.5
-        rb, hb = state.rotations[b][picked], state.dims[b][picked] * 0.5
-        overlaps = upright_overlaps if upright else pair_overlaps
-        hit[close] = overlaps(pa[close], ra, ha, pb[close], rb, hb) > CONTACT_TOL
-    return hit
+    """Which of the candidates `rows` have boxes of a and b that collide (collisions.collide_pairs)."""
+    return collide_pairs(state.positions[a][rows], state.rotations[a][rows], state.dims[a][rows] * 0.5,
+                         state.positions[b][rows], state.rotations[b][rows], state.dims[b][rows] * 0.5,
+                         state.reaches[a][rows] + state.reaches[b][rows], upright)
 
 
 __all__ = ["BUDGET", "CandidateSampler", "CHUNK"]

@@ -10,10 +10,12 @@ collision. Resting contact (`on`) overlaps by 0 and is never a collision.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from prsc.geometry.boxes import Box
-from prsc.geometry.obb import CONTACT_TOL, axis_aligned, boxes_collide, minkowski_obstacle
+from prsc.geometry.obb import CONTACT_TOL, axis_aligned, boxes_collide, minkowski_obstacle, pair_overlaps, upright_overlaps
 from prsc.geometry.polytope import Polytope
 
 
@@ -119,3 +121,30 @@ def obstacles_for(candidates: list[PlacedBox], rotation: np.ndarray, half: np.nd
     """Minkowski obstacles: the centres where the new box would hit each candidate."""
     aligned = axis_aligned(rotation)
     return [minkowski_obstacle(q.box, rotation, half, CONTACT_TOL, aligned=aligned and q.aligned) for q in candidates]
+
+
+def apart(lo_a: np.ndarray, hi_a: np.ndarray, reach_a: Any, lo_b: np.ndarray, hi_b: np.ndarray, reach_b: Any,
+          tol: float = CONTACT_TOL) -> bool:
+    """Whether two boxes (axis-aligned half extents reach_a, reach_b) centred anywhere in [lo_a, hi_a] and
+    [lo_b, hi_b] never overlap by more than tol on some world axis: `near`'s broad phase over every scene."""
+    gap = np.asarray(reach_a) + np.asarray(reach_b) - tol
+    return bool(np.any(hi_a + gap <= lo_b) or np.any(hi_b + gap <= lo_a))
+
+
+def collide_pairs(pa: np.ndarray, ra: np.ndarray, ha: np.ndarray, pb: np.ndarray, rb: np.ndarray, hb: np.ndarray,
+                  reach: np.ndarray, upright: bool, aligned: bool = False) -> np.ndarray:
+    """Which of n box pairs collide, as `first_hit` decides one: boxes whose axis-aligned boxes (summed half
+    extents `reach`) overlap by more than the tolerance on every world axis, then the SAT (5 axes when both
+    boxes only yaw); the broad phase alone decides for two axis-aligned boxes. Centres (n, 3); rotations and
+    half extents (n, 3, 3) and (n, 3), or broadcastable to them."""
+    close = np.flatnonzero(np.all(np.abs(pa - pb) < reach - CONTACT_TOL, axis=1))
+    hit = np.zeros(len(pa), dtype=bool)
+    if aligned or not len(close):
+        hit[close] = True
+        return hit
+    n = len(pa)
+    ra, ha = np.broadcast_to(ra, (n, 3, 3))[close], np.broadcast_to(ha, (n, 3))[close]
+    rb, hb = np.broadcast_to(rb, (n, 3, 3))[close], np.broadcast_to(hb, (n, 3))[close]
+    overlaps = upright_overlaps if upright else pair_overlaps
+    hit[close] = overlaps(pa[close], ra, ha, pb[close], rb, hb) > CONTACT_TOL
+    return hit

@@ -31,11 +31,11 @@ from prsc.constraints.model import ConstraintProgram
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError
-from prsc.geometry.obb import CONTACT_TOL, axis_aligned, pair_overlaps, upright_overlaps
+from prsc.geometry.obb import CONTACT_TOL, axis_aligned
 from prsc.geometry.sampler import UniformSampler
 from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.candidate_plan import CandidatePlan
-from prsc.sampling.collisions import PlacedBox, obstacles_for
+from prsc.sampling.collisions import PlacedBox, apart, collide_pairs, obstacles_for
 from prsc.sampling.counter_stream import scene_keys, uniforms
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.prepared import Prepared
@@ -102,13 +102,11 @@ def group_plan(plan: CandidatePlan, runtimes: Sequence[ObjectRuntime]) -> tuple[
 
 def _may_meet(k: int, j: int, items: list, bounds: dict[str, tuple[np.ndarray, np.ndarray]],
               runtimes: Sequence[ObjectRuntime]) -> bool:
-    """Whether the boxes of objects k and j may collide in some scene (neither allows it, neither rests in the
-    other, and their axis-aligned boxes over every scene overlap by more than the contact tolerance)."""
+    """Whether the boxes of objects k and j may collide in some scene: neither allows it, neither rests in the
+    other, and their boxes over every scene are not apart (collisions.apart)."""
     if runtimes[k].allow_static or runtimes[j].allow_static or j in runtimes[k].plan.rests_in or k in runtimes[j].plan.rests_in:
         return False
-    (lo_k, hi_k), (lo_j, hi_j) = bounds[items[k][0]], bounds[items[j][0]]
-    gap = items[k][3] + items[j][3] - CONTACT_TOL
-    return not bool(np.any(hi_k + gap <= lo_j) or np.any(hi_j + gap <= lo_k))
+    return not apart(*bounds[items[k][0]], items[k][3], *bounds[items[j][0]], items[j][3])
 
 
 class GroupGibbs:
@@ -120,6 +118,7 @@ class GroupGibbs:
         self.cprog = cprog
         self.runtimes = runtimes
         self.sweeps = sweeps
+        self._index = {obj.name: k for k, obj in enumerate(objects)}
 
     def draw(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
         """Scenes `indices` of `seed`."""
@@ -134,7 +133,7 @@ class GroupGibbs:
         for sweep in range(self.sweeps):
             for k, obj in enumerate(self.objects):
                 if obj.movable:
-                    positions[k] = self._redraw(k, STARTS + sweep, keys, positions, obj.partners, seed, indices)
+                    positions[k] = self._redraw(k, STARTS + sweep, keys, positions, obj.partners)
         return [self._result(positions, i, seed, index) for i, index in enumerate(indices)]
 
     def _start(self, seed: int, indices: list[int], keys: np.ndarray) -> list[np.ndarray]:
@@ -144,18 +143,19 @@ class GroupGibbs:
         todo = np.arange(m)
         for attempt in range(STARTS):
             stuck = np.zeros(len(todo), dtype=bool)
+            sub, try_keys = [p[todo] for p in positions], keys[todo]  # the scenes this start is for
             for k, obj in enumerate(self.objects):
                 earlier = tuple(j for j in obj.partners if j < k)
-                sub = [p[todo] for p in positions]
-                try_keys = keys[todo]
                 if obj.prepared.point is not None:
                     placed = np.broadcast_to(obj.prepared.point, (len(todo), 3)).copy()
                     if obj.anchor is not None:
-                        placed = placed + sub[self._index(obj.anchor)]
+                        placed = placed + sub[self._index[obj.anchor]]
                     stuck |= self._hits(k, placed[:, None, :], sub, earlier)[:, 0]
                 else:
-                    placed, dead = self._draw(k, attempt, try_keys, sub, earlier, seed, [indices[i] for i in todo])
+                    placed, dead = self._draw(k, attempt, try_keys, sub, earlier)
                     stuck |= dead
+                sub[k] = placed
+            for k, placed in enumerate(sub):
                 positions[k][todo] = placed
             todo = todo[stuck]
             if not len(todo):
@@ -163,15 +163,14 @@ class GroupGibbs:
         raise PrscError(f"could not sample scene {indices[int(todo[0])]} (seed {seed}): every start of the Gibbs "
                         f"sweeps met a dead end ({STARTS} starts)")
 
-    def _redraw(self, k: int, stage: int, keys: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...],
-                seed: int, indices: list[int]) -> np.ndarray:
-        placed, dead = self._draw(k, stage, keys, positions, partners, seed, indices)
+    def _redraw(self, k: int, stage: int, keys: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...]) -> np.ndarray:
+        placed, dead = self._draw(k, stage, keys, positions, partners)
         # Its own place is free, so the free space is empty only by rounding: it stays where it is.
         placed[dead] = positions[k][dead]
         return placed
 
-    def _draw(self, k: int, stage: int, keys: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...],
-              seed: int, indices: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    def _draw(self, k: int, stage: int, keys: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...]
+              ) -> tuple[np.ndarray, np.ndarray]:
         """Object k uniform on its region minus the partners' boxes, per scene: (centres, which scenes found none)."""
         obj = self.objects[k]
         sampler = obj.prepared.sampler
@@ -179,7 +178,7 @@ class GroupGibbs:
         m, width = len(keys), sampler.dim + 1
         total = sum(PROPOSALS)
         u = uniforms(keys, _SITE + 2 * (stage * len(self.objects) + k), (total + 1) * width)
-        shift = np.zeros((m, 3)) if obj.anchor is None else positions[self._index(obj.anchor)]
+        shift = np.zeros((m, 3)) if obj.anchor is None else positions[self._index[obj.anchor]]
         out = np.zeros((m, 3))
         pending = np.arange(m)
         first = 0
@@ -212,7 +211,8 @@ class GroupGibbs:
 
     def _hits(self, k: int, centres: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...]) -> np.ndarray:
         """Which of object k's boxes at `centres` (m, s, 3: s per scene) collide with a partner's box in its
-        scene (positions[j] (m, 3)): collisions.first_hit's broad phase, exact for two axis-aligned boxes, then SAT."""
+        scene (positions[j] (m, 3)): the broad phase broadcast over the scene's s boxes, which decides for
+        two axis-aligned boxes; collisions.collide_pairs for the close pairs of the others."""
         obj = self.objects[k]
         hit = np.zeros(centres.shape[:2], dtype=bool)
         for j in partners:
@@ -223,18 +223,12 @@ class GroupGibbs:
             if obj.aligned and other.aligned:
                 hit |= close
                 continue
-            rows, cols = np.nonzero(close)
-            if not len(rows):
-                continue
-            n = len(rows)
-            overlaps = upright_overlaps if obj.upright and other.upright else pair_overlaps
-            depth = overlaps(centres[rows, cols], np.broadcast_to(obj.rotation, (n, 3, 3)), np.broadcast_to(obj.half, (n, 3)),
-                             positions[j][rows], np.broadcast_to(other.rotation, (n, 3, 3)), np.broadcast_to(other.half, (n, 3)))
-            hit[rows, cols] = depth > CONTACT_TOL
+            scenes, boxes = np.nonzero(close)
+            if len(scenes):
+                hit[scenes, boxes] = collide_pairs(centres[scenes, boxes], obj.rotation, obj.half, positions[j][scenes],
+                                                   other.rotation, other.half, obj.reach + other.reach,
+                                                   obj.upright and other.upright)
         return hit
-
-    def _index(self, name: str) -> int:
-        return next(k for k, o in enumerate(self.objects) if o.name == name)
 
     def _result(self, positions: list[np.ndarray], i: int, seed: int, index: int) -> SceneResult:
         """Scene i of a chunk as the sequential sampler returns it (properties from the scene's own Generator)."""

@@ -21,7 +21,7 @@ from prsc.ir.program import Program
 from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchedSampler, batch_plan
 from prsc.sampling.candidate_plan import candidate_plan
-from prsc.sampling.candidates import CandidateSampler, Drawn
+from prsc.sampling.candidates import CHUNK, CandidateSampler, Drawn
 from prsc.sampling.gibbs import DEFAULT_SWEEPS
 from prsc.sampling.group_gibbs import SWEEPS as GROUP_SWEEPS, GroupGibbs, group_plan
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
@@ -181,6 +181,14 @@ class Sampler:
                 return self._group.draw(seed, indices)
             return [self._engine.sample(seed, index) for index in indices]
         return [self._settle(drawn, seed, index) for drawn, index in zip(self._candidates.draw(seed, indices), indices)]
+
+    def each_result(self, seed: int, indices: Sequence[int]) -> Iterator[tuple[int, SceneResult]]:
+        """(index, result) for scenes `indices` of an unbatched spec, lazily: a chunk of scenes at a time
+        when candidate rounds or vectorised sweeps draw them, else one at a time."""
+        step = CHUNK if self.chunked else 1
+        for first in range(0, len(indices), step):
+            chunk = indices[first:first + step]
+            yield from zip(chunk, self.results(seed, chunk))
 
     def _settle(self, drawn: Drawn, seed: int, index: int) -> SceneResult:
         """A candidate round's scene: itself, its error raised, or (no candidate passed) the Gibbs sampler's."""

@@ -17,6 +17,7 @@ from prsc.constraints.values import DIMENSIONS, ObjectValue, OrientedPoint, Regi
 from prsc.errors import PrscError, Span
 from prsc.ir.builtins import DENSITY, joint_name
 from prsc.ir.models import model_of
+from prsc.geometry.rotations import matrix_to_quat_one
 from prsc.limits import mass_problem, size_problem
 
 FORMAT = "prsc-scene"
@@ -93,27 +94,12 @@ def color_rgba(value: Any, where: str = "") -> list[float]:
     raise PrscError(f"cannot read {value!r} as the colour of {where}")
 
 
-def _quaternion(r: list[list[float]]) -> list[float]:
-    """rotations.matrix_to_quat for one matrix in plain floats (Shepperd's method, the same pivots;
-    a numpy call per object cost more than the rest of a candidate scene's JSON)."""
-    diag = [r[0][0] + r[1][1] + r[2][2], r[0][0] - r[1][1] - r[2][2], -r[0][0] + r[1][1] - r[2][2], -r[0][0] - r[1][1] + r[2][2]]
-    pivot = max(range(4), key=diag.__getitem__)
-    s = math.sqrt(max(1.0 + diag[pivot], 0.0)) * 2.0
-    d21, d02, d10 = r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]
-    s01, s02, s12 = r[0][1] + r[1][0], r[0][2] + r[2][0], r[1][2] + r[2][1]
-    q = ([s / 4, d21 / s, d02 / s, d10 / s], [d21 / s, s / 4, s01 / s, s02 / s],
-         [d02 / s, s01 / s, s / 4, s12 / s], [d10 / s, s02 / s, s12 / s, s / 4])[pivot]
-    norm = math.sqrt(sum(v * v for v in q))
-    sign = -1.0 if q[0] / norm < 0 else 1.0
-    return [sign * v / norm for v in q]
-
-
 def quaternion_wxyz(rotation: np.ndarray) -> list[float]:
     """The rotation as [w, x, y, z] (w >= 0), cached for repeated rotations."""
     key = rotation.tobytes()
     quat = _QUAT_CACHE.get(key)
     if quat is None:
-        quat = _quaternion(rotation.tolist())
+        quat = matrix_to_quat_one(rotation.tolist())
         if len(_QUAT_CACHE) > 4096:
             _QUAT_CACHE.clear()
         _QUAT_CACHE[key] = quat

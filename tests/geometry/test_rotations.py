@@ -92,3 +92,13 @@ def test_yaw_toward():
         assert np.allclose(fwd, horiz / np.linalg.norm(horiz), atol=1e-12)
     with pytest.raises(ValueError):
         rot.yaw_toward([0, 0, 1])
+
+
+def test_one_matrix_in_plain_floats_is_the_vectorised_quaternion():
+    """scene_json's per-object quaternion (matrix_to_quat_one) has the bits of matrix_to_quat, pivots included."""
+    from prsc.geometry.rotations import matrix_to_quat, matrix_to_quat_one, quat_to_matrix
+
+    rng = np.random.default_rng(5)
+    matrices = list(quat_to_matrix(rng.normal(size=(2000, 4)))) + [np.eye(3), np.diag([-1.0, -1.0, 1.0]), np.diag([1.0, -1.0, -1.0])]
+    for m in matrices:
+        assert matrix_to_quat_one(m.tolist()) == matrix_to_quat(m).tolist()
