@@ -14,6 +14,16 @@ mount (a static model with moving joints is refused by Drake, and its joints do 
 Gazebo); pybullet skips world-level joints, and a base link of mass 0 is fixed in pybullet
 (it cannot parse a joint whose parent is "world" inside a model). A camera object carries a
 camera `<sensor>` looking along the object's +y.
+
+Where each robot's joints start (the scene's `joints`, the asset's home for the rest) is
+stated in the world as a custom element, `<prsc:joint_positions>` holding one
+`<prsc:joint model="M" name="J">value</prsc:joint>` per moving joint (SDFormat's custom
+elements: a prefix declared with `xmlns:prsc` on `<sdf>`, JOINTS_NAMESPACE). Link poses stay at
+the zero configuration, because SDF measures joint values from the poses written. SDFormat
+has no element that every reader takes: `<axis><initial_position>` is gone from 1.9's schema
+and Drake's parser refuses it, and the world `<state>` (Gazebo's saved worlds) is refused by
+Drake too. Readers that do not know the prefix skip the element (Drake with one warning);
+pybullet loads at zero, and docs/backends.md shows the three lines that set the joints.
 """
 
 from __future__ import annotations
@@ -37,6 +47,7 @@ from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.geometry.rotations import matrix_to_rpy, quat_to_rpy, rot_z
 
 SDF_VERSION = "1.9"
+JOINTS_NAMESPACE = "urn:prsc:sdf:joint-positions"  # the `prsc:` prefix of the joints' starting values
 
 
 def _pose(parent: ET.Element, xyz, quat=None, rpy=None, relative_to: str | None = None) -> None:
@@ -222,6 +233,20 @@ def _world_weld(world: ET.Element, name: str) -> None:
     ET.SubElement(joint, "child").text = f"{name}::{name}"
 
 
+def _joint_positions(world: ET.Element, bodies: tuple[Body, ...]) -> None:
+    """`<prsc:joint_positions>`: every moving joint of every robot at its starting value (module docstring)."""
+    robots = [body for body in bodies if body.robot is not None]
+    if not robots:
+        return
+    holder = ET.SubElement(world, "prsc:joint_positions")
+    for body in robots:
+        assert body.robot is not None
+        values = body.robot.home(dict(body.obj.joints))
+        for joint in robot_tree(body.robot).joints:
+            if joint.type != "fixed" and joint.name in values:
+                ET.SubElement(holder, "prsc:joint", model=body.obj.name, name=joint.name).text = num(values[joint.name])
+
+
 def _ground_model(world: ET.Element, name: str) -> None:
     model = ET.SubElement(world, "model", name=name)
     ET.SubElement(model, "static").text = "1"
@@ -242,7 +267,7 @@ def sdf_text(scene: Scene, path: Path, store: AssetStore) -> str:
     """The SDF world of a scene to be written at `path` (mesh URIs relative to it)."""
     folder = Path(path).parent
     bodies = resolve_bodies(scene, store)
-    root = ET.Element("sdf", version=SDF_VERSION)
+    root = ET.Element("sdf", {"version": SDF_VERSION, "xmlns:prsc": JOINTS_NAMESPACE})
     world = ET.SubElement(root, "world", name=f"scene_{scene.index}")
     ET.SubElement(world, "gravity").text = "0 0 -9.81"
     if scene.ground:
@@ -260,6 +285,7 @@ def sdf_text(scene: Scene, path: Path, store: AssetStore) -> str:
     for body in bodies:
         if body.robot is not None and body.fixed:
             _world_weld(world, body.obj.name)
+    _joint_positions(world, bodies)
     return '<?xml version="1.0"?>\n' + serialise(root, pieces) + "\n"
 
 

@@ -12,6 +12,7 @@ from tests.assets.test_user_arms import (  # noqa: F401  (the same checks, colle
     test_reachable_cubes_are_reached_top_down_on_the_compiled_model,
     test_the_example_controller_drives_every_arm_by_its_own_names,
     test_the_reach_check_fails_on_a_cube_out_of_reach,
+    test_the_sdf_states_where_every_joint_starts_and_pybullet_set_there_matches_mujoco,
     test_urdf_bundle_sdf_and_usd_carry_every_joint,
 )
 

@@ -5,7 +5,8 @@ and a small actuated MJCF arm written here, compiled through the CLI to every fo
   of simulation the arm holds them (servos, or gravity compensation where the file has no
   actuators) while the cubes around it stay put;
 - the URDF bundle loads in pybullet with every joint, and its scene.json states where each
-  starts; pybullet's SDF import loads the arm with its joints; the USD validates and holds
+  starts; pybullet's SDF import loads the arm with its joints, and set at the joint values the
+  SDF states, puts every link where MuJoCo's `home` key does; the USD validates and holds
   a revolute joint per arm joint under one articulation root, and Newton loads it with every
   joint at the scene's value;
 - `reachable by` cubes are reached top-down by an IK solve on the compiled MuJoCo model
@@ -185,6 +186,26 @@ def test_urdf_bundle_sdf_and_usd_carry_every_joint(arm_output):
     for prim in driven:
         target = UsdPhysics.DriveAPI(prim, "angular").GetTargetPositionAttr().Get()
         assert target == pytest.approx(np.degrees(values[prim.GetName()]), abs=1e-4)
+
+
+def test_the_sdf_states_where_every_joint_starts_and_pybullet_set_there_matches_mujoco(arm_output):
+    import mujoco
+
+    name, joints, root, scenes = arm_output
+    k = len(scenes) - 1
+    sdf = root / "sdf" / f"{k:05d}.sdf"
+    wanted = _arm(scenes[k])["joints"]
+    stated = readback.sdf_joint_positions(sdf)
+    assert stated == {("arm", j): pytest.approx(v, abs=1e-12) for j, v in wanted.items()}
+    links = readback.sdf_link_positions_at(sdf, "arm", {j: v for (_, j), v in stated.items()})
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / f"{k:05d}.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    both = [link for link in links if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"arm/{link}") >= 0]
+    assert len(both) >= joints, f"{name}: only {both} are links in both"
+    gap = max(np.linalg.norm(links[link] - data.body(f"arm/{link}").xpos) for link in both)
+    assert gap < 1e-5, f"{name}: pybullet at the SDF's joint values puts a link {gap * 1000:.2f} mm from MuJoCo's home"
 
 
 def test_newton_loads_the_usd_with_every_joint_where_the_scene_starts_it(arm_output):

@@ -191,6 +191,33 @@ def sdf_poses(path: Path) -> dict[str, tuple]:
         p.disconnect(client)
 
 
+def sdf_joint_positions(path: Path) -> dict[tuple[str, str], float]:
+    """The starting joint values an SDF world states (`<prsc:joint_positions>`): (model, joint) -> value."""
+    from prsc.backends.sdf import JOINTS_NAMESPACE
+
+    root = ET.parse(path).getroot()
+    return {(e.get("model"), e.get("name")): float(e.text) for e in root.iter(f"{{{JOINTS_NAMESPACE}}}joint")}
+
+
+def sdf_link_positions_at(path: Path, model: str, values: dict[str, float]) -> dict[str, np.ndarray]:
+    """pybullet.loadSDF the world, set `model`'s joints to `values`, and return its links' world
+    frame origins by link name (the bodies' frames, as MuJoCo's xpos gives them)."""
+    p, client = _bullet()
+    try:
+        bodies = p.loadSDF(str(path), physicsClientId=client)
+        body = next(b for b in bodies if p.getBodyInfo(b, physicsClientId=client)[1].decode() == model)
+        joints = range(p.getNumJoints(body, physicsClientId=client))
+        for j in joints:
+            name = p.getJointInfo(body, j, physicsClientId=client)[1].decode()
+            if name in values:
+                p.resetJointState(body, j, values[name], physicsClientId=client)
+        return {p.getJointInfo(body, j, physicsClientId=client)[12].decode():
+                np.array(p.getLinkState(body, j, computeForwardKinematics=True, physicsClientId=client)[4])
+                for j in joints}
+    finally:
+        p.disconnect(client)
+
+
 def ign_check(path: Path) -> subprocess.CompletedProcess:
     """`ign sdf -k` on a file."""
     return subprocess.run(["ign", "sdf", "-k", str(path)], capture_output=True, text=True, timeout=120)
