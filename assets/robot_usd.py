@@ -56,6 +56,31 @@ def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float], drives
     return target
 
 
+def _valid_names(names: list[str], reserved: set[str]) -> dict[str, str]:
+    """Each name as a USD prim name: itself where USD allows it, else made valid
+    (Tf.MakeValidIdentifier: `base_link-inertia` -> `base_link_inertia`), and unique."""
+    from pxr import Tf
+
+    taken = set(reserved)
+    out: dict[str, str] = {}
+    for name in names:
+        valid = candidate = Tf.MakeValidIdentifier(name)
+        k = 1
+        while candidate in taken:
+            candidate = f"{valid}_{k}"
+            k += 1
+        taken.add(candidate)
+        out[name] = candidate
+    return out
+
+
+def prim_names(tree: RobotTree) -> tuple[dict[str, str], dict[str, str]]:
+    """The prim names of a tree's links (under the root, beside `joints`) and joints (under
+    `joints`, beside `root_joint`): URDF and MJCF names may hold `-`, `.` or `/`, USD's may not."""
+    return (_valid_names([link.name for link in tree.links], {"joints"}),
+            _valid_names([joint.name for joint in tree.joints], {"root_joint"}))
+
+
 def drive_attribute(joint: Joint) -> str:
     """The attribute of a joint's drive target (`drive:angular:...` in degrees, `linear` in m)."""
     return f"drive:{'linear' if joint.type == 'prismatic' else 'angular'}:physics:targetPosition"
@@ -194,10 +219,12 @@ def _axis_frame(axis: np.ndarray) -> np.ndarray:
     return np.eye(3) + s * k + (1 - c) * (k @ k)
 
 
-def _joint(stage, root: str, joint: Joint, home: dict[str, float], drives: bool) -> None:
+def _joint(stage, root: str, joint: Joint, home: dict[str, float], drives: bool,
+           names: tuple[dict[str, str], dict[str, str]]) -> None:
     from pxr import Gf, Sdf, UsdPhysics
 
-    path = f"{root}/joints/{joint.name}"
+    links, joints = names
+    path = f"{root}/joints/{joints[joint.name]}"
     frame = _axis_frame(joint.axis) if joint.type != "fixed" else np.eye(3)
     if joint.type == "fixed":
         usd = UsdPhysics.FixedJoint.Define(stage, path)
@@ -215,8 +242,8 @@ def _joint(stage, root: str, joint: Joint, home: dict[str, float], drives: bool)
             usd.CreateUpperLimitAttr(joint.upper)
     else:
         raise ValueError(f"joint {joint.name}: type {joint.type!r} has no USD equivalent")
-    usd.CreateBody0Rel().SetTargets([Sdf.Path(f"{root}/{joint.parent}")])
-    usd.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{joint.child}")])
+    usd.CreateBody0Rel().SetTargets([Sdf.Path(f"{root}/{links[joint.parent]}")])
+    usd.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{links[joint.child]}")])
     usd.CreateLocalPos0Attr(Gf.Vec3f(*(float(v) for v in joint.origin[:3, 3])))
     usd.CreateLocalRot0Attr(_quatf(joint.origin[:3, :3] @ frame))
     usd.CreateLocalPos1Attr(Gf.Vec3f(0.0, 0.0, 0.0))
@@ -249,23 +276,25 @@ def _write_robot_usd(robot: str, tree: RobotTree, home: dict[str, float], path: 
     stage.SetDefaultPrim(top.GetPrim())
     UsdPhysics.ArticulationRootAPI.Apply(top.GetPrim())
     poses = tree.link_poses(home)
+    names = prim_names(tree)
     for link in tree.links:
-        xform = UsdGeom.Xform.Define(stage, f"{root}/{link.name}")
+        prim = f"{root}/{names[0][link.name]}"
+        xform = UsdGeom.Xform.Define(stage, prim)
         set_pose(xform, poses[link.name])
         UsdPhysics.RigidBodyAPI.Apply(xform.GetPrim())
         rot = link.inertial_origin[:3, :3]
         apply_mass(xform.GetPrim(), link.mass, link.inertial_origin[:3, 3], rot @ link.inertia @ rot.T)
         for k, geometry in enumerate(link.visuals):
-            _geometry_prim(stage, f"{root}/{link.name}/visual_{k}", geometry, geometry.rgba)
+            _geometry_prim(stage, f"{prim}/visual_{k}", geometry, geometry.rgba)
         for k, geometry in enumerate(link.collisions):
-            collider = _geometry_prim(stage, f"{root}/{link.name}/collision_{k}", geometry)
+            collider = _geometry_prim(stage, f"{prim}/collision_{k}", geometry)
             collider.CreatePurposeAttr(UsdGeom.Tokens.guide)
             UsdPhysics.CollisionAPI.Apply(collider.GetPrim())
             if geometry.kind == "mesh":
                 UsdPhysics.MeshCollisionAPI.Apply(collider.GetPrim()).CreateApproximationAttr(UsdPhysics.Tokens.convexHull)
     UsdGeom.Scope.Define(stage, f"{root}/joints")
     for joint in tree.joints:
-        _joint(stage, root, joint, home, drives)
+        _joint(stage, root, joint, home, drives, names)
     fixed = UsdPhysics.FixedJoint.Define(stage, f"{root}/joints/root_joint")
-    fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{tree.root}")])
+    fixed.CreateBody1Rel().SetTargets([Sdf.Path(f"{root}/{names[0][tree.root]}")])
     stage.GetRootLayer().Save()

@@ -266,7 +266,7 @@ def _joint_values(layer, path: str, body: Body) -> None:
     in its scene posture)."""
     from pxr import Gf, Sdf
 
-    from prsc.assets.robot_usd import drive_attribute, state_attribute, usd_joint_value
+    from prsc.assets.robot_usd import drive_attribute, prim_names, state_attribute, usd_joint_value
     from prsc.geometry.rotations import matrix_to_quat
 
     robot = body.robot
@@ -274,8 +274,9 @@ def _joint_values(layer, path: str, body: Body) -> None:
     if values == robot.home():
         return
     tree = robot_tree(robot)
+    links, joints = prim_names(tree)
     for name, pose in tree.link_poses(values).items():
-        link = Sdf.CreatePrimInLayer(layer, f"{path}/{name}")
+        link = Sdf.CreatePrimInLayer(layer, f"{path}/{links[name]}")
         link.specifier = Sdf.SpecifierOver
         Sdf.AttributeSpec(link, "xformOp:translate", Sdf.ValueTypeNames.Double3).default = \
             Gf.Vec3d(*(float(v) for v in pose[:3, 3]))
@@ -284,7 +285,7 @@ def _joint_values(layer, path: str, body: Body) -> None:
     for joint in tree.joints:
         if joint.type not in ("revolute", "continuous", "prismatic") or joint.name not in values:
             continue
-        spec = Sdf.CreatePrimInLayer(layer, f"{path}/joints/{joint.name}")
+        spec = Sdf.CreatePrimInLayer(layer, f"{path}/joints/{joints[joint.name]}")
         spec.specifier = Sdf.SpecifierOver
         value = usd_joint_value(joint, values[joint.name])
         Sdf.AttributeSpec(spec, state_attribute(joint), Sdf.ValueTypeNames.Float).default = value

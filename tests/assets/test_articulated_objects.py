@@ -6,6 +6,7 @@ that do not exist or are not hollow are errors `prsc check` reports at their lin
 
 from __future__ import annotations
 
+import json
 import shutil
 import subprocess
 import sys
@@ -216,3 +217,23 @@ def test_the_example_spec_compiles_and_rests(tmp_path):
     spec = Path(__file__).resolve().parents[2] / "specs" / "furniture" / "drawer_cubes.prs"
     done = _prsc("compile", str(spec), "-n", "2", "--target", "json,mjcf", "-o", str(tmp_path / "out"), "--settle-check")
     assert done.returncode == 0 and "2 of 2 scenes at rest" in done.stdout, done.stdout + done.stderr
+
+
+def test_names_usd_does_not_allow_become_valid_prim_names(tmp_path):
+    """URDF names may hold `-` and `.`; USD prim names may not: the stage uses valid ones and
+    still validates, and Newton loads the drawer's joint at the scene's value."""
+    from pxr import Usd, UsdPhysics
+
+    urdf = (DATA / "cabinet.urdf").read_text().replace('"drawer"', '"drawer-1"').replace("drawer_slide", "drawer.slide")
+    (tmp_path / "cabinet.urdf").write_text(urdf)
+    spec = SPEC.replace('"drawer"]', '"drawer-1"]').replace("drawer_slide", "drawer.slide")
+    (tmp_path / "cab.prs").write_text(spec)
+    done = _prsc("compile", str(tmp_path / "cab.prs"), "-n", "1", "--target", "json,usd", "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    usd = tmp_path / "out" / "cab" / "usd" / "00000.usda"
+    assert readback.usd_errors(usd) == []
+    stage = Usd.Stage.Open(str(usd))
+    names = {p.GetName(): p for p in stage.Traverse()}
+    assert "drawer_1" in names and names["drawer_slide"].IsA(UsdPhysics.PrismaticJoint)
+    value = json.loads((tmp_path / "out" / "cab" / "json" / "00000.json").read_text())["objects"][0]["joints"]
+    assert readback.newton_load(usd)["joints"]["drawer_slide"] == pytest.approx(value["drawer.slide"], abs=1e-6)
