@@ -25,7 +25,7 @@ from typing import Sequence
 
 from prsc.asset_inertia import drop_invalid_inertias, unbalanced
 from prsc.errors import PrscError
-from prsc.mesh_paths import mujoco_readable_meshes
+from prsc.mesh_paths import MUJOCO_MESHES, mujoco_readable_meshes, obj_copy
 
 ASSET_SUFFIXES = (".urdf", ".xml", ".mjcf")
 """File names that make `model "..."` a file of the user's own rather than a library name."""
@@ -149,6 +149,7 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
     if root.tag != "robot":
         raise PrscError(f"{path.name} is not a URDF (its root element is <{root.tag}>, not <robot>)")
     _refuse_xacro(root, path)
+    parents = {child: parent for parent in root.iter() for child in parent}
     for mesh in root.iter("mesh"):
         filename = mesh.get("filename", "")
         if filename.startswith("package://"):
@@ -158,6 +159,11 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
         filename = str((path.parent / filename).resolve())
         if not os.path.isfile(filename):
             raise PrscError(f"{path.name}: mesh {mesh.get('filename')!r} not found ({filename})")
+        if Path(filename).suffix.lower() not in MUJOCO_MESHES:
+            geometry = parents.get(mesh)
+            element = parents.get(geometry) if geometry is not None else None
+            filename = _converted_mesh(element if element is not None and element.tag == "visual" else None,
+                                       filename, path)
         mesh.set("filename", filename)
     drop_invalid_inertias(root, path)
     # A root link named "world" fixed to one child is ROS's way of saying "fixed base";
@@ -169,6 +175,19 @@ def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
             if link.get("name") == "world":
                 root.remove(link)
     return root
+
+
+def _converted_mesh(visual: ET.Element | None, filename: str, path: Path) -> str:
+    """An OBJ copy of a mesh MuJoCo cannot decode (mesh_paths.obj_copy), its colour given to
+    the visual that names it when the URDF gives that visual none (ROS's COLLADA visuals)."""
+    try:
+        copy, colour = obj_copy(filename, build_root() / "assets" / "converted")
+    except PrscError as error:
+        raise PrscError(f"{path.name}: {error}") from None
+    if visual is not None and colour is not None and visual.find("material") is None:
+        material = ET.SubElement(visual, "material", name=f"prsc_{Path(filename).stem}")
+        ET.SubElement(material, "color", rgba=" ".join(repr(round(v, 4)) for v in colour))
+    return copy
 
 
 def urdf_with_absolute_paths(path: Path, folders: Sequence[str] = ()) -> str:

@@ -212,6 +212,57 @@ def load_mesh(path: Path | str, up_axis: str = "+z"):
     return mesh
 
 
+MUJOCO_MESHES = (".stl", ".obj", ".msh")  # what MuJoCo decodes; a URDF's other meshes are converted
+
+
+def obj_copy(path: str | Path, cache: Path) -> tuple[str, tuple[float, float, float, float] | None]:
+    """An OBJ copy (in `cache`, by content) of a mesh MuJoCo cannot decode (a ROS URDF's COLLADA
+    `.dae`, a PLY), its parts joined where the file places them, and their area-weighted colour
+    (None without one): the colour goes on the URDF visual, since the copy has no material."""
+    import hashlib
+
+    import numpy as np
+
+    from prsc.files import atomic_write
+
+    source = Path(path)
+    target = cache / hashlib.sha256(source.read_bytes()).hexdigest()[:16] / f"{source.stem}.obj"
+    colour_file = target.with_suffix(".rgba")
+    if not target.is_file():
+        try:
+            scene = read_trimesh(source, force="scene")
+            parts = [geometry for geometry in scene.dump() if len(getattr(geometry, "faces", ())) > 0]
+        except Exception:  # trimesh (and pycollada) raise many types for unreadable files
+            raise PrscError(f"cannot read mesh {source}: not a mesh file trimesh can load") from None
+        if not parts:
+            raise PrscError(f"mesh {source} holds no triangles")
+        colours = [(part.area, _main_colour(part)) for part in parts]
+        known = [(area, colour) for area, colour in colours if colour is not None]
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if known:
+            mean = np.average([c for _, c in known], axis=0, weights=[a for a, _ in known])
+            atomic_write(colour_file, " ".join(repr(float(v)) for v in mean))
+        vertices = np.vstack([part.vertices for part in parts])
+        offsets = np.cumsum([0] + [len(part.vertices) for part in parts[:-1]])
+        faces = np.vstack([part.faces + offset for part, offset in zip(parts, offsets)])
+        atomic_write(target, obj_text(vertices, faces, (f"prsc: {source.name} as OBJ",)))
+    colour = tuple(float(v) for v in colour_file.read_text().split()) if colour_file.is_file() else None
+    return str(target), colour  # type: ignore[return-value]
+
+
+def _main_colour(mesh) -> tuple[float, ...] | None:
+    """A trimesh part's colour as RGBA in [0, 1]: its material's main colour or its faces' mean."""
+    import numpy as np
+
+    visual = mesh.visual
+    material = getattr(visual, "material", None)
+    if material is not None and getattr(material, "main_color", None) is not None:
+        return tuple(np.asarray(material.main_color, float) / 255.0)
+    if getattr(visual, "kind", None) in ("face", "vertex"):
+        return tuple(np.asarray(visual.face_colors, float).mean(axis=0) / 255.0)
+    return None
+
+
 def obj_objects(path: str | Path) -> int:
     """How many objects (`o`/`g` groups) with faces an OBJ file holds."""
     counted, faces = 0, False
