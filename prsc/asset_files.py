@@ -17,6 +17,7 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import lru_cache
@@ -140,12 +141,30 @@ def _refuse_xacro(root: ET.Element, path: Path) -> None:
                                 "expand the file with xacro first (`xacro robot.urdf.xacro > robot.urdf`)")
 
 
+def parse_urdf(path: Path) -> ET.Element:
+    """The URDF's root element. A prefix the file uses without declaring it (Drake's
+    `drake:acceleration`, which MuJoCo and pybullet ignore) is declared, as those readers
+    never ask: XML would refuse the file."""
+    try:
+        return ET.parse(path).getroot()
+    except OSError as error:
+        raise PrscError(f"cannot read URDF {path.name}: {error}") from None
+    except ET.ParseError as error:
+        if "unbound prefix" not in str(error):
+            raise PrscError(f"cannot read URDF {path.name}: {error}") from None
+    text = path.read_text(encoding="utf-8", errors="replace")
+    used = set(re.findall(r"[<\s/]([A-Za-z_][\w.-]*):[A-Za-z_]", text)) - {"xml", "xmlns", "http", "https", "package", "file"}
+    declared = set(re.findall(r"xmlns:([A-Za-z_][\w.-]*)\s*=", text))
+    missing = " ".join(f'xmlns:{prefix}="urn:prsc:undeclared:{prefix}"' for prefix in sorted(used - declared))
+    try:
+        return ET.fromstring(re.sub(r"<robot\b", f"<robot {missing}", text, count=1))
+    except ET.ParseError as error:
+        raise PrscError(f"cannot read URDF {path.name}: {error}") from None
+
+
 def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
     """The URDF's root element with every mesh path absolute (`package://` resolved)."""
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError) as error:
-        raise PrscError(f"cannot read URDF {path.name}: {error}") from None
+    root = parse_urdf(path)
     if root.tag != "robot":
         raise PrscError(f"{path.name} is not a URDF (its root element is <{root.tag}>, not <robot>)")
     _refuse_xacro(root, path)
@@ -349,7 +368,7 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
 
 def _massless_root(path: Path, root: str) -> bool:
     """Whether a URDF's root link declares a mass of 0: pybullet's fixed base (its table.urdf and tray.urdf)."""
-    link = next((e for e in ET.parse(path).getroot().iter("link") if e.get("name") == root), None)
+    link = next((e for e in parse_urdf(path).iter("link") if e.get("name") == root), None)
     mass = None if link is None else link.find("inertial/mass")
     try:
         return mass is not None and float(mass.get("value", "nan")) == 0.0

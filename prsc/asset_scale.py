@@ -19,7 +19,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Sequence
 
-from prsc.asset_files import asset_spec, build_root, urdf_with_absolute_paths
+from prsc.asset_files import asset_spec, build_root, parse_urdf, urdf_with_absolute_paths
 from prsc.files import atomic_write
 
 SCALE_VERSION = "1"
@@ -33,7 +33,7 @@ def _times(text: str | None, factor: float) -> str:
 def _massless_links(path: Path) -> set[str]:
     """The links a URDF declares with mass 0 (pybullet's fixed base: its table and tray)."""
     names = set()
-    for link in ET.parse(path).getroot().iter("link"):
+    for link in parse_urdf(path).iter("link"):
         mass = link.find("inertial/mass")
         try:
             if mass is not None and float(mass.get("value", "nan")) == 0.0:

@@ -1,6 +1,8 @@
-"""A URDF whose meshes are COLLADA (`.dae`, as most ROS URDFs' visuals are): prsc reads them
-through trimesh (pycollada) and writes OBJ copies, which MuJoCo decodes, with the file's
-colour on the visual (docs/assets.md)."""
+"""URDFs as ROS and Drake write them. COLLADA meshes (`.dae`, as most ROS URDFs' visuals are):
+prsc reads them through trimesh (pycollada) and writes OBJ copies, which MuJoCo decodes,
+with the file's colour on the visual. Attributes under a prefix the file never declares
+(Drake's `drake:acceleration`), which MuJoCo and pybullet ignore, are read too
+(docs/assets.md)."""
 
 from __future__ import annotations
 
@@ -73,3 +75,29 @@ def test_an_unreadable_collada_mesh_is_an_error_at_the_model_line(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "s.prs:3:" in done.stderr and "bad.dae" in done.stderr, done.stderr
+
+
+def test_a_prefix_the_urdf_never_declares_is_read_as_mujoco_and_pybullet_read_it(tmp_path):
+    (tmp_path / "arm.urdf").write_text(textwrap.dedent("""\
+        <robot name="two">
+          <link name="base"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+            <collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+          <link name="arm"><inertial><mass value="0.5"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+            <collision><origin xyz="0 0 0.15"/><geometry><box size="0.04 0.04 0.3"/></geometry></collision></link>
+          <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/><origin xyz="0 0 0.05"/>
+            <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1" drake:acceleration="3"/></joint>
+        </robot>
+        """))
+    (tmp_path / "s.prs").write_text(textwrap.dedent("""\
+        from tabletop import *
+        class Arm:
+            model: "arm.urdf"
+        a = Arm on Vector3D(0, 0, 0), with joint "hinge" 0.5
+        """))
+    done = subprocess.run([sys.executable, "-m", "prsc.cli", "compile", str(tmp_path / "s.prs"), "-n", "1",
+                           "--target", "json,mjcf,urdf", "-o", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    readback.urdf_validate(tmp_path / "out" / "s" / "urdf" / "00000")
+    _, model, data = readback.scene_at_home(tmp_path / "out" / "s", 0)
+    assert data.qpos[model.joint("a/hinge").qposadr[0]] == pytest.approx(0.5)
