@@ -45,7 +45,7 @@ class RobotModel:
     root_offset: tuple[float, float, float] | None  # root frame from the box centre; None: bottom centre
     root: str  # the root link (body)
     tcp: str | None  # tool site or body
-    actuated: bool  # whether the MJCF has actuators (else it holds its pose by gravity compensation)
+    servo_joints: tuple[str, ...]  # joints the file's own position servos hold; prsc gives the others servos
     passive: bool = False  # not a robot (no `tcp`: a cabinet): joints only damped, no servos, no gravity compensation
 
     def mount_position(self, dimensions: tuple[float, float, float]) -> tuple[float, float, float]:
@@ -80,20 +80,25 @@ class RobotModel:
             for joint in spec.joints:
                 joint.damping = [GRAVITY_COMPENSATION_DAMPING, 0.0, 0.0]
                 joint.armature = SERVO_ARMATURE
-        elif not self.actuated:
-            # No actuators of its own (a URDF): compensate gravity on every link, damp the
-            # joints, and give each joint a position servo named after it, force-limited to
-            # the file's effort where it states one, so that controllers can drive it.
+        elif any(joint.name not in self.servo_joints for joint in spec.joints):
+            # Joints no servo of the file's holds (a URDF has no actuators; robosuite's arms have
+            # torque motors, which stay, at 0): compensate gravity on every link, damp the joints,
+            # and give each such joint a position servo named after it, force-limited to the
+            # file's effort where it states one, so that it holds its pose and controllers can drive it.
             import mujoco
 
             for body in spec.bodies[1:]:
                 body.gravcomp = 1.0
-            for joint in spec.joints:
-                joint.damping = [GRAVITY_COMPENSATION_DAMPING, 0.0, 0.0]
-                joint.armature = SERVO_ARMATURE
+            for joint in spec.joints:  # at least prsc's damping and rotor inertia, or the file's own
+                joint.damping = [max(float(joint.damping[0]), GRAVITY_COMPENSATION_DAMPING), 0.0, 0.0]
+                joint.armature = max(float(joint.armature), SERVO_ARMATURE)
             inertia = spec.compile().dof_M0  # each joint's inertia at the reference pose
+            names = {actuator.name for actuator in spec.actuators}
             for joint, moment in zip(spec.joints, inertia):
-                servo = spec.add_actuator(name=joint.name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+                if joint.name in self.servo_joints:
+                    continue
+                name = joint.name if joint.name not in names else f"{joint.name}_servo"
+                servo = spec.add_actuator(name=name, target=joint.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
                 servo.set_to_position(kp=float(moment) * SERVO_FREQUENCY ** 2, kv=2 * float(moment) * SERVO_FREQUENCY)
                 effort = joint.actfrcrange
                 if effort[1] > effort[0]:
@@ -124,14 +129,15 @@ def _panda() -> RobotModel:
     asset = describe_asset(panda_mjcf_path())
     exact = dict(zip(ARM_JOINTS, HOME_QPOS))  # the keyframe's text rounds them to 6 digits
     joints = tuple(replace(j, home=exact.get(j.name, j.home)) for j in asset.joints)
-    return RobotModel("panda", asset.source, (), joints, PANDA_BASE_YAW, None, "base", "tcp", True)
+    return RobotModel("panda", asset.source, (), joints, PANDA_BASE_YAW, None, "base", "tcp",
+                      tuple(j.name for j in joints))
 
 
 @lru_cache(maxsize=64)
 def _file_model(path: str, folders: tuple[str, ...], passive: bool) -> RobotModel:
     asset: ArticulatedAsset = describe_asset(path, folders)
     return RobotModel(asset.key, asset.source, folders, asset.joints, 0.0, asset.root_offset, asset.root,
-                      asset.tcp, bool(asset.actuators), passive and not asset.actuators)
+                      asset.tcp, asset.servo_joints, passive and not asset.actuators)
 
 
 def robot_model(model: str | None, folders: Sequence[str] = (), passive: bool = False) -> RobotModel | None:

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from prsc.asset_files import COLLISION_GROUP  # collision-only geoms: hidden in MuJoCo's viewer and renderer
+from prsc.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
@@ -93,9 +93,7 @@ def _robot_fragment_xml(robot: RobotModel, prefix: str) -> tuple[str, tuple[str,
     joints = tuple(model.joint(j).name[len(prefix):] for j in range(model.njnt))
     servo_joints = []
     for a in range(model.nu):
-        servo = (int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
-                 and int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
-                 and model.actuator_biasprm[a, 1] == -model.actuator_gainprm[a, 0])
+        servo = int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT) and is_position_servo(model, a)
         servo_joints.append(joints[model.actuator_trnid[a, 0]] if servo else None)
     return holder.to_xml(), joints, tuple(servo_joints)
 

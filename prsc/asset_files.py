@@ -78,6 +78,7 @@ class ArticulatedAsset:
     box_low: tuple[float, float, float]  # the geometry's box (drawn and colliding) about the root's origin, at home
     box_high: tuple[float, float, float]
     fixed: bool = False  # a URDF whose root link has mass 0: fixed in the world, as pybullet loads it
+    servo_joints: tuple[str, ...] = ()  # the joints a position servo of the file's own holds (not a torque motor)
 
     @property
     def key(self) -> str:
@@ -363,7 +364,28 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
         tcp=_tool_frame(model, sites), box_low=tuple(float(v) for v in points.min(axis=0)),  # type: ignore[arg-type]
         box_high=tuple(float(v) for v in points.max(axis=0)),  # type: ignore[arg-type]
         fixed=path.suffix.lower() == ".urdf" and _massless_root(path, model.body(root).name),
+        servo_joints=position_servo_joints(model),
     )
+
+
+def position_servo_joints(model) -> tuple[str, ...]:
+    """The joints that a position servo of the model drives directly."""
+    import mujoco
+
+    return tuple(sorted({model.joint(int(model.actuator_trnid[a, 0])).name for a in range(model.nu)
+                         if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+                         and is_position_servo(model, a)}))
+
+
+def is_position_servo(model, actuator: int) -> bool:
+    """Whether a compiled model's actuator is a position servo, which holds its joint at its
+    control: gain kp > 0 and bias -kp on the position, as `<position>` writes (robosuite's
+    `<motor>`s apply torques and hold nothing)."""
+    import mujoco
+
+    gain = model.actuator_gainprm[actuator, 0]
+    return (int(model.actuator_biastype[actuator]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
+            and gain > 0 and model.actuator_biasprm[actuator, 1] == -gain)
 
 
 def _massless_root(path: Path, root: str) -> bool:

@@ -11,6 +11,7 @@ import mujoco
 import numpy as np
 
 from prsc.arm_ik import ArmFrames
+from prsc.asset_files import is_position_servo
 from prsc.assets.articulated import robot_model
 from prsc.backends.names import with_body_names
 from prsc.errors import PrscError
@@ -85,9 +86,17 @@ def chain_joints(model: mujoco.MjModel, tool: str) -> set[str]:
 
 
 def _joint_actuators(model: mujoco.MjModel) -> dict[int, int]:
-    """The actuator that drives each joint directly, by joint id."""
-    return {int(model.actuator_trnid[a, 0]): a for a in range(model.nu)
-            if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)}
+    """The actuator that drives each joint directly, by joint id: its position servo where it has
+    one beside a torque motor (prsc's, next to robosuite's motors), as controllers send positions."""
+    found: dict[int, int] = {}
+    for a in range(model.nu):
+        if int(model.actuator_trntype[a]) != int(mujoco.mjtTrn.mjTRN_JOINT):
+            continue
+        joint = int(model.actuator_trnid[a, 0])
+        if joint not in found or is_position_servo(model, a):
+            found[joint] = a
+    return found
+
 
 
 def driven_joints(model: mujoco.MjModel) -> set[str]:

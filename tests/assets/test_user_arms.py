@@ -384,3 +384,48 @@ def test_a_spec_tcp_has_its_own_reach_and_the_controller_drives_it(tmp_path):
     point = np.array(last["position"]) + [0.0, 0.0, HOVER]
     assert np.linalg.norm(data.body("arm/wrist").xpos - point) < 0.01
     assert np.linalg.norm(data.site("arm/tcp").xpos - point) > 0.04
+
+
+def test_an_arm_of_torque_motors_holds_its_pose_and_controllers_get_position_servos(tmp_path):
+    """robosuite's arms drive their joints with torque `<motor>`s, which hold nothing at 0: the arm
+    keeps them, and gets gravity compensation and prsc's position servos, which the runner drives."""
+    import mujoco
+
+    from prsc.arm_ik import ArmFrames
+    from prsc.backends.runner.arm_scene import SceneArm, servos
+
+    motors = MJCF_ARM.split("<actuator>")[0] + "<actuator>\n" + "".join(
+        f'    <motor name="{j}" joint="{j}" gear="1" ctrlrange="-50 50"/>\n' for j in ("yaw", "pitch", "elbow", "wrist")
+    ) + "  </actuator>" + MJCF_ARM.split("</actuator>")[1]
+    (tmp_path / "arm.xml").write_text(motors)
+    spec = tmp_path / "arm.prs"
+    spec.write_text(textwrap.dedent("""\
+        from tabletop import *
+        table = Table on Vector3D(0, 0, 0), with width 1.8, with length 1.2, with height 0.75
+        class Arm(Robot):
+            model: "arm.xml"
+        arm = Arm on (top back table).position + Vector3D(0, 0.25, 0), with joint "elbow" 1.0
+        c1 = Cube completely on table
+        """))
+    done = _prsc("compile", str(spec), "-n", "1", "--target", "json,mjcf", "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    root = tmp_path / "out" / "arm"
+    scene = json.loads((root / "json" / "00000.json").read_text())
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    assert {model.actuator(a).name for a in range(model.nu)} >= {"arm/yaw", "arm/yaw_servo", "arm/wrist_servo"}
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    wanted = _arm(scene)["joints"]
+    adr = {j: model.jnt_qposadr[model.joint(f"arm/{j}").id] for j in wanted}
+    while data.time < 1.0:
+        mujoco.mj_step(model, data)
+    drift = max(abs(data.qpos[adr[j]] - v) for j, v in wanted.items())
+    assert drift < 0.02, f"the arm of motors left its home pose by {drift:.3f} rad"
+    # The runner drives the servos, not the motors: a position sent moves the joint there.
+    frames = SceneArm.of(scene, model, "test").frames
+    assert isinstance(frames, ArmFrames)
+    drive = servos(model, frames)
+    assert all(model.actuator(a).name.endswith("_servo") for a in drive)
+    data.ctrl[drive] = data.qpos[frames.qpos] + 0.2
+    mujoco.mj_step(model, data, nstep=int(2.0 / model.opt.timestep))
+    assert np.allclose(data.qpos[frames.qpos], data.ctrl[drive], atol=0.02)
