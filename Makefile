@@ -65,12 +65,13 @@ casestudy-check: casestudy
 clean:
 	rm -rf build out .pytest_cache
 
-# `reachable by`: regenerate the Panda's top-down reachable set from its IK (~11 min), measure
-# what it keeps of the true reach and of a tray; then the 200-episode demonstration (docs/sampling.md).
+# `reachable by`: regenerate the Panda's top-down reachable set from its IK (~11 min on 2 cores), measure
+# what it keeps of the true reach and of a tray, check its edge; then the 200-episode demonstration (docs/sampling.md).
 .PHONY: reach reach-demo
 reach: $(STAMP)
-	$(PY) -m prsc.commands.reach
-	$(PY) -m prsc.commands.reach --coverage
-	$(PY) -m prsc.commands.reach --tray-report specs/table_cube_reach.prs
+	$(PY) -m prsc.commands.reach --jobs 2
+	$(PY) -m prsc.commands.reach --coverage --jobs 2
+	$(PY) -m prsc.commands.reach --tray-report specs/table_cube_reach.prs --jobs 2
+	$(PY) -m prsc.commands.reach --edge-check --jobs 2
 reach-demo: $(STAMP)
 	$(PRSC) run specs/table_cube_reach.prs -n 200 --seed 0 --jobs 2 -o out/reach

@@ -23,6 +23,7 @@ RESTARTS = 8
 # m two of the arm's own links may overlap before a pose counts as colliding with itself: the
 # collision meshes of neighbours two links apart overlap by a few mm in ordinary poses.
 SELF_PENETRATION = 0.005
+LINE_STEP = 0.03  # m between IK points along a straight tool path (the controller's descent and lift)
 
 
 @dataclass(frozen=True)
@@ -121,6 +122,21 @@ class ArmIK:
             first = first or solution
         assert first is not None
         return first
+
+    def solve_line(self, start: np.ndarray, end: np.ndarray, rotation: np.ndarray, start_q: np.ndarray,
+                   free: bool = False) -> list[IKSolution]:
+        """Solutions along the tool's straight path from `start` to `end` (LINE_STEP apart, each from the
+        one before), up to the first not reached, which ends the list; `free` marks self-collisions too."""
+        start, end = np.asarray(start, float), np.asarray(end, float)
+        count = max(1, int(np.ceil(np.linalg.norm(end - start) / LINE_STEP)))
+        solve = self.solve_free if free else self.solve
+        path, q = [], start_q
+        for k in range(1, count + 1):
+            path.append(solve(start + (end - start) * k / count, rotation, q))
+            if not path[-1].reached:
+                break
+            q = path[-1].q
+        return path
 
     def solve_free(self, position: np.ndarray, rotation: np.ndarray, start_q: np.ndarray) -> IKSolution:
         """`solve`, its answer marked when the pose puts one of the arm's links into another."""

@@ -16,7 +16,6 @@ T = TypeVar("T")
 CONTROL_STEPS = 5  # physics steps per control update (10 ms at the 2 ms timestep)
 JOINT_SPEED = 1.2  # rad/s, average over a move (min-jerk peaks at 1.9x, under the Panda's 2.17)
 MIN_MOVE_SECONDS = 0.4
-LINE_STEP = 0.03  # m between IK points along a straight tool path
 
 
 class Unreachable(Exception):
@@ -64,16 +63,11 @@ class Arm:
         )
 
     def plan_line(self, start: np.ndarray, end: np.ndarray, q_start: np.ndarray, label: str) -> list[np.ndarray]:
-        """Joint waypoints moving the tool centre straight from `start` to `end`, top-down."""
-        count = max(1, int(np.ceil(np.linalg.norm(end - start) / LINE_STEP)))
-        path, q = [], q_start
-        for k in range(1, count + 1):
-            solution = self.ik.solve(start + (end - start) * k / count, self.down, q)
-            if not solution.reached:
-                raise Unreachable(self.name, label, solution)
-            q = solution.q
-            path.append(q)
-        return path
+        """Joint waypoints moving the tool centre straight from `start` to `end`, top-down (ArmIK.solve_line)."""
+        path = self.ik.solve_line(start, end, self.down, q_start)
+        if not path[-1].reached:
+            raise Unreachable(self.name, label, path[-1])
+        return [solution.q for solution in path]
 
     def plan_from_home(self, target: np.ndarray, label: str, then: Callable[[np.ndarray], T]) -> tuple[np.ndarray, T]:
         """Joint angles putting the tool centre top-down at `target`, sought from home as `reachable by`

@@ -7,9 +7,10 @@ command, not a backend: it drives the runner's IK and, for the tray report, samp
 
 Reachable means what the handover controller needs (backends/runner/handover.py): with
 the gripper pointing down as at home, the tool centre reaches the point 12 cm above it
-(the approach, sought from home with restarts as the controller seeks it), the point and
-15 cm above it (the lift), each IK solved from the previous one, in poses that do not put
-the arm into itself. Along each ray from the base (SECTORS directions) and at each height
+(the approach, sought from home with restarts as the controller seeks it), then moves
+straight down to the point and up 15 cm (the lift) in the controller's 3 cm steps
+(ArmIK.solve_line), each IK solved from the previous one, in poses that do not put the arm
+into itself. Along each ray from the base (SECTORS directions) and at each height
 (HEIGHTS) the longest run of reachable radii is scanned every 5 cm and its ends bisected
 to 3 mm.
 
@@ -64,16 +65,16 @@ class TopDownReach:
 
     def reaches(self, point: np.ndarray) -> bool:
         """The approach sought from home as the controller seeks it (ArmIK.solutions_from_home), then
-        the point, then the lift, each from the previous solution, none putting a link into another."""
+        down to the point and up to the lift in the controller's straight steps (ArmIK.solve_line),
+        each from the previous solution, none putting a link into another."""
+        point = np.asarray(point, float)
         up = np.array([0.0, 0.0, 1.0])
-        for solution in self.ik.solutions_from_home(np.asarray(point + APPROACH * up, float), self.down):
+        approach = point + APPROACH * up
+        for solution in self.ik.solutions_from_home(approach, self.down):
             if not solution.reached:
                 continue
-            for target in (point, point + LIFT * up):
-                solution = self.ik.solve_free(np.asarray(target, float), self.down, solution.q)
-                if not solution.reached:
-                    break
-            else:
+            down = self.ik.solve_line(approach, point, self.down, solution.q, free=True)
+            if down[-1].reached and self.ik.solve_line(point, point + LIFT * up, self.down, down[-1].q, free=True)[-1].reached:
                 return True
         return False
 
@@ -127,15 +128,23 @@ def panda_ring(rays: dict, angles: list[float]) -> ReachRing:
     return ring_from_rays([a + math.pi / 2 for a in angles[:SECTORS]], list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)
 
 
-def compute() -> dict:
-    """The reachable-set data of the Panda (minutes of IK)."""
-    reach = TopDownReach()
-    angles = _angles()
-    rays: dict[tuple[int, int], tuple[float, float] | None] = {}
-    for k, height in enumerate(HEIGHTS):
-        for j in range(SECTORS):
-            rays[k, j] = ray_interval(reach, angles[j], height)
-    return reach_data(rays)
+_reach: TopDownReach | None = None  # one per worker process: its IK model is compiled once
+
+
+def _ray_job(_shared: None, ray: tuple[int, int]) -> tuple[float, float] | None:
+    """One ray's reached run: (height index, ray index) (a worker's item)."""
+    global _reach
+    _reach = _reach or TopDownReach()
+    k, j = ray
+    return ray_interval(_reach, _angles()[j], HEIGHTS[k])
+
+
+def compute(jobs: int = 1) -> dict:
+    """The reachable-set data of the Panda (minutes of IK), its rays scanned by `jobs` processes."""
+    from prsc.commands.executors import LocalExecutor
+
+    keys = [(k, j) for k in range(len(HEIGHTS)) for j in range(SECTORS)]
+    return reach_data(dict(zip(keys, LocalExecutor(jobs).map(_ray_job, None, keys))))
 
 
 def reach_data(rays: dict[tuple[int, int], tuple[float, float] | None]) -> dict:
@@ -156,13 +165,14 @@ def reach_data(rays: dict[tuple[int, int], tuple[float, float] | None]) -> dict:
     }
 
 
-def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02) -> dict:
+def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02, jobs: int = 1) -> dict:
     """How much of a tray the cell keeps, against the IK on a grid of cube centres.
 
     Grid over the cube centres `completely on` the tray allows (scene 0 of seed 0), every
     `step` metres: the fraction in the cell, the fraction the IK reaches, and the
     fraction of the reachable ones the cell keeps (and any cell point the IK misses).
     """
+    from prsc.commands.executors import LocalExecutor
     from prsc.constraints.reach import reach_ring
     from prsc.sampling import compile_sampler
 
@@ -174,18 +184,13 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     half_cube = np.asarray(objects[cube]["dimensions"]) / 2
     z = objects[cube]["position"][2]
     ring = reach_ring(objects[robot]["model"])
-    reach = TopDownReach()
     xs = np.arange(centre[0] - dims[0] / 2 + half_cube[0], centre[0] + dims[0] / 2 - half_cube[0] + 1e-9, step)
     ys = np.arange(centre[1] - dims[1] / 2 + half_cube[1], centre[1] + dims[1] / 2 - half_cube[1] + 1e-9, step)
-    counts = {"points": 0, "in_cell": 0, "reached": 0, "both": 0}
-    for x in xs:
-        for y in ys:
-            q = rot.T @ (np.array([x, y, z]) - base)
-            in_cell, reached = bool(contains(ring, q)[0]), reach.reaches(q)
-            counts["points"] += 1
-            counts["in_cell"] += in_cell
-            counts["reached"] += reached
-            counts["both"] += in_cell and reached
+    points = np.array([rot.T @ (np.array([x, y, z]) - base) for x in xs for y in ys])
+    in_cell = contains(ring, points)
+    reached = np.array(LocalExecutor(jobs).map(_reaches_job, None, [tuple(p) for p in points.tolist()]), dtype=bool)
+    counts = {"points": len(points), "in_cell": int(in_cell.sum()), "reached": int(reached.sum()),
+              "both": int((in_cell & reached).sum())}
     n = counts["points"]
     return {
         **counts, "step": step,
@@ -196,17 +201,44 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02)
     }
 
 
-def panda_coverage(step: float = 0.03) -> dict:
-    """What the shipped ring keeps of the Panda's true top-down reach at its base's height: the
-    IK (TopDownReach, as the controller seeks a pose) at every point of a grid about the base."""
+def _reaches_job(_shared: None, point: tuple[float, float, float]) -> bool:
+    """Whether the Panda's tool reaches one point (a worker's item)."""
+    global _reach
+    _reach = _reach or TopDownReach()
+    return _reach.reaches(np.array(point))
+
+
+def panda_edge_check(step: float = 0.01, band: float = 0.02, jobs: int = 1) -> dict:
+    """Every point the shipped ring keeps within `band` of its edge, on a `step` grid at the
+    lowest and highest height, against the IK: the points where the ring is most likely wrong."""
+    from prsc.commands.executors import LocalExecutor
     from prsc.constraints.reach import reach_ring
 
     ring = reach_ring("panda")
     assert ring is not None
-    reach = TopDownReach()
+    xs = np.arange(-COVERAGE_EXTENT, COVERAGE_EXTENT + step / 2, step)
+    offsets = band * np.array([[math.cos(a), math.sin(a), 0.0] for a in np.arange(0, 2 * math.pi, math.pi / 8)])
+    report = {"step": step, "band": band}
+    for height in (HEIGHTS[0], HEIGHTS[-1]):
+        grid = np.array([[x, y, height] for x in xs for y in xs])
+        kept = grid[contains(ring, grid)]
+        near = kept[[not contains(ring, point + offsets).all() for point in kept]]
+        reached = np.array(LocalExecutor(jobs).map(_reaches_job, None, [tuple(p) for p in near.tolist()]), dtype=bool)
+        report[f"{height:g} m"] = {"points": len(near), "not_reached": near[~reached].round(3).tolist()}
+    return report
+
+
+def panda_coverage(step: float = 0.03, jobs: int = 1) -> dict:
+    """What the shipped ring keeps of the Panda's true top-down reach at its base's height: the
+    IK (TopDownReach, as the controller seeks a pose) at every point of a grid about the base."""
+    from prsc.commands.executors import LocalExecutor
+    from prsc.constraints.reach import reach_ring
+
+    ring = reach_ring("panda")
+    assert ring is not None
     xs = np.arange(-COVERAGE_EXTENT, COVERAGE_EXTENT + step / 2, step)
     points = np.array([[x, y, 0.0] for x in xs for y in xs if math.hypot(x, y) <= COVERAGE_EXTENT])
-    reached = np.array([reach.reaches(p) for p in points], dtype=bool)
+    reached = np.array(LocalExecutor(jobs).map(_reaches_job, None, [tuple(p) for p in points.tolist()]), dtype=bool)
     return {"step": step, "points": len(points), **ring_coverage(ring, points, reached)}
 
 
@@ -334,14 +366,20 @@ def main() -> None:
     parser.add_argument("--tray-report", metavar="SPEC", help="instead: the fraction of tr_1 that c1 keeps under r1, vs IK")
     parser.add_argument("--coverage", action="store_true",
                         help="instead: what the ring keeps of the true reach at the base's height (3 cm grid, vs IK)")
+    parser.add_argument("--edge-check", action="store_true",
+                        help="instead: the IK at every point the ring keeps within 2 cm of its edge (1 cm grid)")
+    parser.add_argument("--jobs", type=int, default=1, help="processes running the IK (default 1)")
     args = parser.parse_args()
+    if args.edge_check:
+        print(json.dumps(panda_edge_check(jobs=args.jobs), indent=1))
+        return
     if args.tray_report:
-        print(json.dumps(tray_report(args.tray_report, "tr_1", "c1", "r1"), indent=1))
+        print(json.dumps(tray_report(args.tray_report, "tr_1", "c1", "r1", jobs=args.jobs), indent=1))
         return
     if args.coverage:
-        print(json.dumps(panda_coverage(), indent=1))
+        print(json.dumps(panda_coverage(jobs=args.jobs), indent=1))
         return
-    data = compute()
+    data = compute(args.jobs)
     atomic_write(args.output, json.dumps(data, indent=1) + "\n")
     print(f"{len(data['ring']['b'])} rows of the ring written to {args.output}")
 
