@@ -17,16 +17,16 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
-from prsc.asset_inertia import drop_invalid_inertias, unbalanced
+from prsc.asset_inertia import unbalanced
 from prsc.errors import PrscError
-from prsc.mesh_paths import MUJOCO_MESHES, mujoco_readable_meshes, obj_copy
+from prsc.mesh_paths import mujoco_readable_meshes
+from prsc.urdf_source import parse_urdf, urdf_tree
 
 ASSET_SUFFIXES = (".urdf", ".xml", ".mjcf")
 """File names that make `model "..."` a file of the user's own rather than a library name."""
@@ -39,6 +39,11 @@ def build_root() -> Path:
     """prsc's build folder for converted assets and caches: `$PRSC_BUILD_DIR`, default `<repo>/build`."""
     root = os.environ.get("PRSC_BUILD_DIR")
     return Path(root) if root else Path(__file__).resolve().parents[1] / "build"
+
+
+def _converted_meshes() -> Path:
+    """Where OBJ copies of the meshes MuJoCo cannot decode go (prsc.urdf_source)."""
+    return build_root() / "assets" / "converted"
 
 
 def names_asset_file(model: object) -> bool:
@@ -118,103 +123,11 @@ def resolve_asset_file(raw: str, folders: Sequence[str]) -> Path:
     return resolve_mesh(raw, folders, anywhere=True, what="asset")
 
 
-def _package_path(uri: str, urdf: Path, folders: Sequence[str]) -> str:
-    """The file a `package://NAME/rest` names: folder NAME beside the URDF or in an ancestor,
-    then in the --include folders."""
-    name, _, rest = uri[len("package://"):].partition("/")
-    for base in (urdf.parent, *urdf.parent.parents, *map(Path, folders)):
-        if (base / name).is_dir():
-            return str(base / name / rest)
-    raise PrscError(f"{urdf.name}: {uri!r} does not resolve: no folder {name!r} beside the URDF, "
-                    "in its parent folders or in the --include folders")
-
-
-def _refuse_xacro(root: ET.Element, path: Path) -> None:
-    """A URDF that still holds xacro (`$(arg x)`, `${expr}`: husky.urdf's IMU) is refused at the
-    first such value, with its line: MuJoCo would only say "bad format in attribute"."""
-    for element in root.iter():
-        for key, value in element.attrib.items():
-            if "$(" in value or "${" in value:
-                text = path.read_text(errors="replace")
-                at = text.find(value)
-                line = f" line {text.count(chr(10), 0, at) + 1}," if at >= 0 else ""
-                raise PrscError(f"{path.name}:{line} <{element.tag} {key}=\"{value}\"> is a xacro expression, not a value; "
-                                "expand the file with xacro first (`xacro robot.urdf.xacro > robot.urdf`)")
-
-
-def parse_urdf(path: Path) -> ET.Element:
-    """The URDF's root element. A prefix the file uses without declaring it (Drake's
-    `drake:acceleration`, which MuJoCo and pybullet ignore) is declared, as those readers
-    never ask: XML would refuse the file."""
-    try:
-        return ET.parse(path).getroot()
-    except OSError as error:
-        raise PrscError(f"cannot read URDF {path.name}: {error}") from None
-    except ET.ParseError as error:
-        if "unbound prefix" not in str(error):
-            raise PrscError(f"cannot read URDF {path.name}: {error}") from None
-    text = path.read_text(encoding="utf-8", errors="replace")
-    used = set(re.findall(r"[<\s/]([A-Za-z_][\w.-]*):[A-Za-z_]", text)) - {"xml", "xmlns", "http", "https", "package", "file"}
-    declared = set(re.findall(r"xmlns:([A-Za-z_][\w.-]*)\s*=", text))
-    missing = " ".join(f'xmlns:{prefix}="urn:prsc:undeclared:{prefix}"' for prefix in sorted(used - declared))
-    try:
-        return ET.fromstring(re.sub(r"<robot\b", f"<robot {missing}", text, count=1))
-    except ET.ParseError as error:
-        raise PrscError(f"cannot read URDF {path.name}: {error}") from None
-
-
-def _urdf_tree(path: Path, folders: Sequence[str]) -> ET.Element:
-    """The URDF's root element with every mesh path absolute (`package://` resolved)."""
-    root = parse_urdf(path)
-    if root.tag != "robot":
-        raise PrscError(f"{path.name} is not a URDF (its root element is <{root.tag}>, not <robot>)")
-    _refuse_xacro(root, path)
-    parents = {child: parent for parent in root.iter() for child in parent}
-    for mesh in root.iter("mesh"):
-        filename = mesh.get("filename", "")
-        if filename.startswith("package://"):
-            filename = _package_path(filename, path, folders)
-        elif filename.startswith("file://"):
-            filename = filename[len("file://"):]
-        filename = str((path.parent / filename).resolve())
-        if not os.path.isfile(filename):
-            raise PrscError(f"{path.name}: mesh {mesh.get('filename')!r} not found ({filename})")
-        if Path(filename).suffix.lower() not in MUJOCO_MESHES:
-            geometry = parents.get(mesh)
-            element = parents.get(geometry) if geometry is not None else None
-            filename = _converted_mesh(element if element is not None and element.tag == "visual" else None,
-                                       filename, path)
-        mesh.set("filename", filename)
-    drop_invalid_inertias(root, path)
-    # A root link named "world" fixed to one child is ROS's way of saying "fixed base";
-    # prsc mounts the asset itself, so the child is the root in every format.
-    world = [j for j in root.findall("joint") if j.find("parent") is not None and j.find("parent").get("link") == "world"]
-    if len(world) == 1 and world[0].get("type") == "fixed":
-        root.remove(world[0])
-        for link in root.findall("link"):
-            if link.get("name") == "world":
-                root.remove(link)
-    return root
-
-
-def _converted_mesh(visual: ET.Element | None, filename: str, path: Path) -> str:
-    """An OBJ copy of a mesh MuJoCo cannot decode (mesh_paths.obj_copy), its colour given to
-    the visual that names it when the URDF gives that visual none (ROS's COLLADA visuals)."""
-    try:
-        copy, colour = obj_copy(filename, build_root() / "assets" / "converted")
-    except PrscError as error:
-        raise PrscError(f"{path.name}: {error}") from None
-    if visual is not None and colour is not None and visual.find("material") is None:
-        material = ET.SubElement(visual, "material", name=f"prsc_{Path(filename).stem}")
-        ET.SubElement(material, "color", rgba=" ".join(repr(round(v, 4)) for v in colour))
-    return copy
-
-
 def urdf_with_absolute_paths(path: Path, folders: Sequence[str] = ()) -> str:
     """The URDF's text with every mesh path absolute, for any URDF reader; a link whose
     inertial was dropped gets the one MuJoCo computes from its geometry, so every format
     carries the same masses."""
-    root = _urdf_tree(path, folders)
+    root = urdf_tree(path, folders, _converted_meshes())
     for link in [link for link in root.findall("link") if unbalanced(link)]:
         link.remove(link.find("inertial"))
     missing = [link for link in root.findall("link") if link.find("inertial") is None]
@@ -238,7 +151,7 @@ def urdf_with_absolute_paths(path: Path, folders: Sequence[str] = ()) -> str:
 
 def _urdf_text(path: Path, folders: Sequence[str]) -> str:
     """The URDF with absolute mesh paths and MuJoCo's import told to keep visuals and links."""
-    root = _urdf_tree(path, folders)
+    root = urdf_tree(path, folders, _converted_meshes())
     for extension in root.findall("mujoco"):
         root.remove(extension)
     extension = ET.SubElement(root, "mujoco")

@@ -19,7 +19,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Sequence
 
-from prsc.asset_files import asset_spec, build_root, parse_urdf, urdf_with_absolute_paths
+from prsc.asset_files import asset_spec, build_root, urdf_with_absolute_paths
+from prsc.urdf_source import parse_urdf
 from prsc.files import atomic_write
 
 SCALE_VERSION = "1"

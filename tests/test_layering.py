@@ -24,7 +24,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 ROOTS = {"prsc": REPO / "prsc", "prsc.backends": REPO / "backends", "prsc.assets": REPO / "assets"}
-FOUNDATION = {"prsc.errors", "prsc.files", "prsc.limits", "prsc.mesh_paths", "prsc.asset_files", "prsc.asset_inertia", "prsc.asset_links", "prsc.asset_scale", "prsc.cabinet_urdf", "prsc.arm_ik"}  # used by every layer
+FOUNDATION = {"prsc.errors", "prsc.files", "prsc.limits", "prsc.mesh_paths", "prsc.asset_files", "prsc.urdf_source", "prsc.asset_inertia", "prsc.asset_links", "prsc.asset_scale", "prsc.cabinet_urdf", "prsc.arm_ik"}  # used by every layer
 ALLOWED = {  # layer -> the layers it may import, besides itself and FOUNDATION
     "syntax": set(),
     "ir": {"syntax"},

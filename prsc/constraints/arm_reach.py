@@ -32,7 +32,7 @@ from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "6"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "7"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
@@ -120,17 +120,24 @@ def _bisect(ik: TopDownIK, angle: float, height: float, inside: float, outside: 
 
 
 def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | None:
-    """The first run of reachable radii along a ray, both ends refined; None if none.
+    """The longest run of reachable radii along a ray, both ends refined; None if none.
 
-    Outwards from home every STEP, then inwards from the first radius reached, each IK
-    started from the last solution (from home alone the IK misses points near the base).
-    A run ends only where RESTARTS more starts fail too (a 7-joint arm's IK stalls at
-    points it reaches); before the run, where most points fail, they are spared."""
-    q = ik.turned(angle)
-    run: list[float] = []
-    first_q = last_q = q
+    Outwards from home every STEP up to the arm's span, then inwards from the run's first
+    radius, each IK started from the last solution (from home alone the IK misses points
+    near the base). A run ends only where RESTARTS more starts fail too (a 7-joint arm's IK
+    stalls at points it reaches); before a run, where most points fail, they are spared.
+    The longest run, not the first: beside the base a few radii may be reached apart from
+    the rest (robosuite's Sawyer reached 0.10 m, then nothing to 0.4 m, then on to 1 m),
+    and a sector keeps the smaller of its rays' runs."""
+    radii = [radius for radius in RADII if radius <= ik.span() + STEP]
+    runs: list[tuple[list[float], np.ndarray, np.ndarray]] = []  # radii, first and last solution
     for restarts in (0, RESTARTS):
-        for radius in RADII:
+        q = ik.turned(angle)
+        run: list[float] = []
+        first_q = last_q = q
+        for radius in radii:
+            if not run and runs and radii[-1] - radius <= max(r[-1] - r[0] for r, _, _ in runs):
+                break  # what is left of the ray could not hold a longer run
             point = _ray_point(angle, radius, height)
             q_new, ok = ik.reaches(point, q, RESTARTS if run else restarts)
             if ok:
@@ -139,11 +146,15 @@ def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | No
                 run.append(radius)
                 q = last_q = q_new
             elif run:
-                break
+                runs.append((run, first_q, last_q))
+                run, q = [], ik.turned(angle)
         if run:
+            runs.append((run, first_q, last_q))
+        if runs:
             break
-    if not run:
+    if not runs:
         return None
+    run, first_q, last_q = max(runs, key=lambda found: found[0][-1] - found[0][0])
     outer = _bisect(ik, angle, height, run[-1], run[-1] + STEP, last_q)
     inner, q = run[0], first_q
     while inner - STEP / 2 > 0:

@@ -62,7 +62,11 @@ def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarra
         try:
             ring = arm_reach(asset).ring
         except ValueError as error:
-            raise PrscError(f"'reachable by' {robot.name}: {error}", span) from None
+            # The usual cause is the tool frame: a link whose +z does not point out of the hand.
+            others = ", ".join(repr(name) for name in (*asset.sites, *asset.links[-3:]) if name != asset.tcp)
+            raise PrscError(f"'reachable by' {robot.name}: {error}, with the tool frame {asset.tcp!r} pointing "
+                            f"its +z down; name the tool with `with tcp \"NAME\"` (a link or site of the file: "
+                            f"{others})", span) from None
         offset = np.array(asset.root_offset)
     else:
         found = reach_ring(model) if isinstance(model, str) else None

@@ -429,3 +429,11 @@ def test_an_arm_of_torque_motors_holds_its_pose_and_controllers_get_position_ser
     data.ctrl[drive] = data.qpos[frames.qpos] + 0.2
     mujoco.mj_step(model, data, nstep=int(2.0 / model.opt.timestep))
     assert np.allclose(data.qpos[frames.qpos], data.ctrl[drive], atol=0.02)
+
+
+def test_a_tool_that_cannot_point_down_is_an_error_that_names_the_other_frames(tmp_path):
+    (tmp_path / "arm.xml").write_text(MJCF_ARM)
+    spec = _spec(tmp_path, "arm.xml", 'with tcp "shoulder"')
+    done = _prsc("check", str(spec))
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "reaches no sector" in done.stderr and 'with tcp "NAME"' in done.stderr and "'tcp'" in done.stderr, done.stderr

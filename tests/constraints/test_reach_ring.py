@@ -116,3 +116,32 @@ def test_prsc_reach_refuses_a_bad_tool_or_grid(tmp_path, capsys, args, message):
     (tmp_path / "arm.xml").write_text(MJCF_ARM)
     assert main(["reach", str(tmp_path / "arm.xml"), *args]) == 2
     assert message in capsys.readouterr().err
+
+
+class _ReachesBands:
+    """A stand-in for arm_reach.TopDownIK: the tool reaches top-down exactly at the radii in `bands`."""
+
+    def __init__(self, bands: list[tuple[float, float]], span: float) -> None:
+        self.bands, self._span = bands, span
+
+    def reaches(self, point, seed, restarts: int = 0):
+        radius = float(np.hypot(point[0], point[1]))
+        return seed, any(lo <= radius <= hi for lo, hi in self.bands)
+
+    def turned(self, angle: float):
+        return np.zeros(1)
+
+    def span(self) -> float:
+        return self._span
+
+
+def test_a_ray_keeps_its_longest_run_not_a_sliver_beside_the_base():
+    """robosuite's Sawyer reached 0.10 m, then nothing to 0.4 m, then on to 1 m: the first run
+    alone made one sector 0.10 m long, and its rows cut the whole cell (4.9 % kept)."""
+    from prsc.constraints.arm_reach import _ray
+
+    inner, outer = _ray(_ReachesBands([(0.09, 0.11), (0.38, 1.0)], span=1.1), 0.3, 0.0)
+    assert inner == pytest.approx(0.38, abs=0.004) and outer == pytest.approx(1.0, abs=0.004)
+    # One run: the same as before, and the scan stops where the rest cannot hold a longer run.
+    ik = _ReachesBands([(0.2, 0.7)], span=0.75)
+    assert _ray(ik, 0.3, 0.0) == (pytest.approx(0.2, abs=0.004), pytest.approx(0.7, abs=0.004))
