@@ -10,6 +10,7 @@ import numpy as np
 
 from prsc.assets.containers import container_parts
 from prsc.assets.parts import Part, box, cylinder, sphere
+from prsc.asset_files import ROOT_OFFSET
 from prsc.assets.articulated import RobotModel, robot_model
 from prsc.assets.registry import part_recipe
 from prsc.asset_files import names_asset_file
@@ -65,8 +66,12 @@ class Body:
 
     @property
     def mount_position(self) -> tuple[float, float, float]:
-        """The robot's root frame in the object frame (the Panda: the box's bottom centre)."""
+        """The robot's root frame in the object frame: where the IR put it in the object's box
+        (a file asset, at the object's joint values), else the Panda's (the box's bottom centre)."""
         assert self.robot is not None
+        offset = self.obj.properties.get(ROOT_OFFSET)
+        if offset is not None:
+            return tuple(float(v) for v in offset)  # type: ignore[return-value]
         return self.robot.mount_position(self.obj.dimensions)
 
 

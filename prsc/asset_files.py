@@ -18,7 +18,7 @@ import hashlib
 import math
 import os
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
@@ -31,6 +31,9 @@ from prsc.urdf_source import parse_urdf, urdf_tree
 ASSET_SUFFIXES = (".urdf", ".xml", ".mjcf")
 """File names that make `model "..."` a file of the user's own rather than a library name."""
 
+ROOT_OFFSET = "rootOffset"
+"""The property (and scene JSON `properties` key) holding where a file asset's root sits in its
+object's box, from the box centre: the IR sets it from the box at the object's joint values."""
 JOINT_KINDS = {3: "revolute", 2: "prismatic"}
 """MuJoCo joint types (mjJNT_HINGE, mjJNT_SLIDE) the description keeps, by URDF name."""
 
@@ -219,9 +222,6 @@ def describe_asset(path: Path | str, folders: Sequence[str] = ()) -> Articulated
 
 @lru_cache(maxsize=64)
 def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -> ArticulatedAsset:
-    import mujoco
-    import numpy as np
-
     path = Path(source)
     spec = asset_spec(path, folders)
     try:
@@ -244,20 +244,35 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
             value = min(max(0.0, lower), upper)
             qpos[model.jnt_qposadr[j]] = value
         joints.append(AssetJoint(model.joint(j).name, JOINT_KINDS[int(model.jnt_type[j])], lower, upper, value))
+    if model.ngeom == 0:
+        raise PrscError(f"{path.name} has no geometry")
+    low, high = _geometry_box(model, qpos, root)
+    links = tuple(model.body(b).name for b in range(1, model.nbody))
+    sites = tuple(model.site(s).name for s in range(model.nsite))
+    return ArticulatedAsset(
+        source=source, digest=_digest(path), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
+        name=spec.modelname or path.stem, root=model.body(root).name, links=links, joints=tuple(joints),
+        actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
+        tcp=_tool_frame(model, sites), box_low=low, box_high=high,
+        fixed=path.suffix.lower() == ".urdf" and _massless_root(path, model.body(root).name),
+        servo_joints=position_servo_joints(model),
+    )
+
+
+def _geometry_box(model, qpos, root: int) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """The box (low and high corners) of every geom at joint positions `qpos`, about the root
+    body's origin in the file's own axes (an MJCF root turned in its file stays turned)."""
+    import mujoco
+    import numpy as np
+
     data = mujoco.MjData(model)
     data.qpos[:] = qpos
     mujoco.mj_kinematics(model, data)
     # Every geom, drawn or colliding: pybullet's table.urdf collides with its top only, and its
     # legs, visual only, must stand on what the table is placed on.
-    geoms = list(range(model.ngeom))
-    if not geoms:
-        raise PrscError(f"{path.name} has no geometry")
-    # The box is axis-aligned in the file's own axes, about the root body's origin: an MJCF
-    # root that is turned in its file stays turned in every scene.
-    root_pos = data.xpos[root]
     corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
     points = []
-    for g in geoms:
+    for g in range(model.ngeom):
         if model.geom_type[g] == int(mujoco.mjtGeom.mjGEOM_MESH):
             # The mesh's own vertices (in the geom frame): exact, where a box about them is not.
             mesh = model.geom_dataid[g]
@@ -265,20 +280,29 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
         else:
             centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
             local = centre + corners * half
-        world = data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T
-        points.append(world - root_pos)
-    points = np.concatenate(points)
-    links = tuple(model.body(b).name for b in range(1, model.nbody))
-    sites = tuple(model.site(s).name for s in range(model.nsite))
-    return ArticulatedAsset(
-        source=source, digest=_digest(path), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
-        name=spec.modelname or path.stem, root=model.body(root).name, links=links, joints=tuple(joints),
-        actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
-        tcp=_tool_frame(model, sites), box_low=tuple(float(v) for v in points.min(axis=0)),  # type: ignore[arg-type]
-        box_high=tuple(float(v) for v in points.max(axis=0)),  # type: ignore[arg-type]
-        fixed=path.suffix.lower() == ".urdf" and _massless_root(path, model.body(root).name),
-        servo_joints=position_servo_joints(model),
-    )
+        points.append(data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T - data.xpos[root])
+    stacked = np.concatenate(points)
+    return tuple(float(v) for v in stacked.min(axis=0)), tuple(float(v) for v in stacked.max(axis=0))  # type: ignore[return-value]
+
+
+def asset_at(asset: ArticulatedAsset, folders: Sequence[str], values: dict[str, float]) -> ArticulatedAsset:
+    """The asset with its box at these joint values (the others at home): an object's box is
+    the file's at the joint values its spec sets (docs/assets.md, "Size")."""
+    homes = {joint.name: joint.home for joint in asset.joints}
+    if all(values.get(name, home) == home for name, home in homes.items()):
+        return asset
+    low, high = _box_at(asset.source, tuple(folders), tuple(sorted({**homes, **values}.items())))
+    return replace(asset, box_low=low, box_high=high)
+
+
+@lru_cache(maxsize=64)
+def _box_at(source: str, folders: tuple[str, ...], values: tuple[tuple[str, float], ...]):
+    model = asset_spec(Path(source), folders).compile()
+    qpos = model.qpos0.copy()
+    for name, value in values:
+        qpos[model.jnt_qposadr[model.joint(name).id]] = value
+    root = next(b for b in range(1, model.nbody) if model.body_parentid[b] == 0)
+    return _geometry_box(model, qpos, root)
 
 
 def position_servo_joints(model) -> tuple[str, ...]:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.asset_files import describe_asset, names_asset_file
+from prsc.asset_files import ROOT_OFFSET, describe_asset, names_asset_file
 from prsc.constraints.values import ObjectValue
 from prsc.ir.models import model_of
 from prsc.errors import PrscError, Span
@@ -67,7 +67,7 @@ def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarra
             raise PrscError(f"'reachable by' {robot.name}: {error}, with the tool frame {asset.tcp!r} pointing "
                             f"its +z down; name the tool with `with tcp \"NAME\"` (a link or site of the file: "
                             f"{others})", span) from None
-        offset = np.array(asset.root_offset)
+        offset = np.array(robot.props.get(ROOT_OFFSET, asset.root_offset), dtype=float)
     else:
         found = reach_ring(model) if isinstance(model, str) else None
         if found is None:

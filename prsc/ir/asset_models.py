@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import fields, replace
 from typing import Sequence
 
-from prsc.asset_files import ArticulatedAsset, describe_asset, names_asset_file, resolve_asset_file
+from prsc.asset_files import ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, names_asset_file, resolve_asset_file
 from prsc.asset_links import asset_link
 from prsc.asset_scale import scaled_asset_file
 from prsc.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
@@ -74,8 +74,10 @@ def _scale_of(obj: ObjectDecl, scale: ir.Expr | None) -> float:
     return float(scale.value)
 
 
-def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: dict[str, ClassDef]) -> ObjectDecl:
-    """`obj` with the file's box, its base and its joints checked."""
+def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str],
+            classes: dict[str, ClassDef]) -> tuple[ObjectDecl, ArticulatedAsset]:
+    """`obj` with the file's box, its base and its joints checked, and the file's description
+    boxed as the object is."""
     props = dict(obj.properties)
     factor = _scale_of(obj, props.get("scale"))
     try:
@@ -86,16 +88,6 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
         raise PrscError(f"{obj.name}: {error.message}", model.span) from None
     # Found once, here: every later stage and the backends read the file this names.
     props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
-    model_class = _declared_in(classes, obj.class_name, "model", model.span)
-    for size, extent in zip(SIZES, asset.size):
-        written = props.get(size)
-        if written is not None and written.span.path != BUILTIN_SPAN.path:
-            in_object = written.span.path == obj.span.path and obj.span.line <= written.span.line <= obj.span.end_line
-            in_own_class = model_class is not None and _declared_in(classes, obj.class_name, size, written.span) == model_class
-            if in_object or in_own_class:
-                raise PrscError(f"{obj.name}: the {size} of an asset from a file is the file's ({extent:.4g} m); "
-                                f"remove `{size}`", written.span)
-        props[size] = ir.Const(model.span, ir.Type.SCALAR, extent)
     tcp = props.get("tcp")
     if asset.has_joints and (tcp is not None or "Robot" in obj.class_chain):
         # A robot: the scene says so by its tool frame (a Robot subclass always has one).
@@ -109,10 +101,29 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
     # Fixed unless `static False`: an arm, or a URDF whose root has mass 0 (pybullet's fixed base).
     if (asset.has_joints or asset.fixed) and (static is None or static.span.path == BUILTIN_SPAN.path):
         props["static"] = ir.Const(model.span, ir.Type.BOOL, True)
+    constants = {}
     for prop, value in obj.properties:
         joint = joint_name(prop)
         if joint is not None:
             _check_joint(obj, asset, joint, value)
+            ends = _constant_range(value)
+            if ends is not None and ends[0] == ends[1]:
+                constants[joint] = ends[0]
+    # The box is the file's at the joint values the spec sets to constants (the rest at home):
+    # an arm whose home hangs below its root stands on its base once a joint lifts it.
+    asset = asset_at(asset, folders, constants)
+    model_class = _declared_in(classes, obj.class_name, "model", model.span)
+    for size, extent in zip(SIZES, asset.size):
+        written = props.get(size)
+        if written is not None and written.span.path != BUILTIN_SPAN.path:
+            in_object = written.span.path == obj.span.path and obj.span.line <= written.span.line <= obj.span.end_line
+            in_own_class = model_class is not None and _declared_in(classes, obj.class_name, size, written.span) == model_class
+            if in_object or in_own_class:
+                raise PrscError(f"{obj.name}: the {size} of an asset from a file is the file's ({extent:.4g} m); "
+                                f"remove `{size}`", written.span)
+        props[size] = ir.Const(model.span, ir.Type.SCALAR, extent)
+    # Where the file's root sits in that box: every later stage and backend mounts the file there.
+    props[ROOT_OFFSET] = ir.Const(model.span, ir.Type.VECTOR, asset.root_offset)
     # Joints the spec leaves unset start at the file's home: the scene records every joint.
     order = [name for name in props if joint_name(name) is None]  # the object's own, then static and tcp if added
     for joint in asset.joints:
@@ -120,7 +131,7 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str], classes: d
         if prop not in props:
             props[prop] = ir.Const(model.span, ir.Type.SCALAR, joint.home)
         order.append(prop)
-    return replace(obj, properties=tuple((name, props[name]) for name in order))
+    return replace(obj, properties=tuple((name, props[name]) for name in order)), asset
 
 
 def _no_file_joints(obj: ObjectDecl) -> None:
@@ -192,8 +203,7 @@ def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Pro
             obj = _library_cabinet(obj, model)
             model = obj.prop("model")
         if isinstance(model, ir.Const) and names_asset_file(model.value):
-            obj = _fitted(obj, model, folders, classes)
-            assets[obj.name] = describe_asset(str(obj.prop("model").value), folders)
+            obj, assets[obj.name] = _fitted(obj, model, folders, classes)
         else:
             _no_file_joints(obj)
         objects.append(obj)

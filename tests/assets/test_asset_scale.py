@@ -68,12 +68,13 @@ def _alone(path: Path):
 
 
 def test_each_box_is_the_file_times_the_scale(compiled):
-    from prsc.asset_files import describe_asset
+    from prsc.asset_files import asset_at, describe_asset
 
     folder, _, objects = compiled
-    for name, source, scale in (("arm", DATA / "xarm/xarm6_robot.urdf", 0.5), ("lab", folder / "arm.xml", 2.0),
-                                ("small", DATA / "table/table.urdf", 0.3)):
-        own = describe_asset(source, [str(DATA)]).size
+    for name, source, scale, joints in (("arm", DATA / "xarm/xarm6_robot.urdf", 0.5, {"joint3": -0.6}),
+                                        ("lab", folder / "arm.xml", 2.0, {}), ("small", DATA / "table/table.urdf", 0.3, {})):
+        # The box at the joint values the spec sets (joint3 of the arm), which the scale does not change.
+        own = asset_at(describe_asset(source, [str(DATA)]), [str(DATA)], joints).size
         assert objects[name]["dimensions"] == pytest.approx([scale * v for v in own], rel=1e-6), name  # float32 mesh vertices
         assert objects[name]["properties"]["scale"] == scale
 

@@ -437,3 +437,51 @@ def test_a_tool_that_cannot_point_down_is_an_error_that_names_the_other_frames(t
     done = _prsc("check", str(spec))
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "reaches no sector" in done.stderr and 'with tcp "NAME"' in done.stderr and "'tcp'" in done.stderr, done.stderr
+
+
+def _geometry_box(model, data, prefix: str) -> tuple[np.ndarray, np.ndarray]:
+    """The world box of every geom of the bodies named `prefix...` (mesh vertices, else MuJoCo's boxes)."""
+    import mujoco
+
+    points = []
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    for g in range(model.ngeom):
+        if not model.body(model.geom_bodyid[g]).name.startswith(prefix):
+            continue
+        if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH:
+            mesh = model.geom_dataid[g]
+            local = model.mesh_vert[model.mesh_vertadr[mesh]:model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+        else:
+            local = model.geom_aabb[g, :3] + corners * model.geom_aabb[g, 3:]
+        points.append(data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T)
+    stacked = np.concatenate(points)
+    return stacked.min(axis=0), stacked.max(axis=0)
+
+
+@pytest.mark.parametrize("joints", ['with joint "pitch" 1.2, with joint "elbow" 0.3', 'with joint "pitch" -1.0'])
+def test_the_box_is_the_files_at_the_joint_values_the_spec_sets(tmp_path, joints):
+    """LANGUAGE.md section 7: the box at the initial joint values. Pitched down, the arm reaches below
+    its root; its box goes down with it and stands on the table, so nothing enters the table."""
+    import mujoco
+
+    (tmp_path / "arm.xml").write_text(MJCF_ARM)
+    spec = tmp_path / "arm.prs"
+    spec.write_text(textwrap.dedent(f"""\
+        from tabletop import *
+        table = Table on Vector3D(0, 0, 0), with width 1.8, with length 1.2, with height 0.75
+        class Arm(Robot):
+            model: "arm.xml"
+        arm = Arm on (top back table).position + Vector3D(0, 0.25, 0), {joints}
+        """))
+    done = _prsc("compile", str(spec), "-n", "1", "--target", "json,mjcf", "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    root = tmp_path / "out" / "arm"
+    arm = _arm(json.loads((root / "json" / "00000.json").read_text()))
+    model = mujoco.MjModel.from_xml_path(str(root / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_kinematics(model, data)
+    low, high = _geometry_box(model, data, "arm/")
+    centre, half = np.asarray(arm["position"]), np.asarray(arm["dimensions"]) / 2
+    assert np.allclose(low, centre - half, atol=1e-6) and np.allclose(high, centre + half, atol=1e-6)
+    assert low[2] == pytest.approx(0.75, abs=1e-6)  # on the table's top, not in it, not above it
