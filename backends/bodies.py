@@ -10,10 +10,9 @@ import numpy as np
 
 from prsc.assets.containers import container_parts
 from prsc.assets.parts import Part, box, cylinder, sphere
-from prsc.asset_files import ROOT_OFFSET
 from prsc.assets.articulated import RobotModel, robot_model
 from prsc.assets.registry import part_recipe
-from prsc.asset_files import names_asset_file
+from prsc.asset_files import ROOT_OFFSET, names_asset_file
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore, pbr_maps, texture_of

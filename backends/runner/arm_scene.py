@@ -98,7 +98,6 @@ def _joint_actuators(model: mujoco.MjModel) -> dict[int, int]:
     return found
 
 
-
 def driven_joints(model: mujoco.MjModel) -> set[str]:
     """The names of the joints an actuator drives directly."""
     return {model.joint(j).name for j in _joint_actuators(model)}

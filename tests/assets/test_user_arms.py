@@ -75,7 +75,11 @@ ARMS = {
 }
 
 
-def _spec(folder: Path, model: str, joints: str) -> Path:
+REACHABLE_CUBES = "".join(f"c{k} = Cube completely on table, reachable by arm\n" for k in (1, 2, 3))
+
+
+def _spec(folder: Path, model: str, joints: str, objects: str = REACHABLE_CUBES) -> Path:
+    """An arm at the back of a table (`joints`: its specifiers), and `objects` after it."""
     spec = folder / "arm.prs"
     spec.write_text(textwrap.dedent(f"""\
         from tabletop import *
@@ -83,10 +87,7 @@ def _spec(folder: Path, model: str, joints: str) -> Path:
         class Arm(Robot):
             model: "{model}"
         arm = Arm on (top back table).position + Vector3D(0, 0.25, 0), {joints}
-        c1 = Cube completely on table, reachable by arm
-        c2 = Cube completely on table, reachable by arm
-        c3 = Cube completely on table, reachable by arm
-        """))
+        """) + objects)
     return spec
 
 
@@ -398,15 +399,7 @@ def test_an_arm_of_torque_motors_holds_its_pose_and_controllers_get_position_ser
         f'    <motor name="{j}" joint="{j}" gear="1" ctrlrange="-50 50"/>\n' for j in ("yaw", "pitch", "elbow", "wrist")
     ) + "  </actuator>" + MJCF_ARM.split("</actuator>")[1]
     (tmp_path / "arm.xml").write_text(motors)
-    spec = tmp_path / "arm.prs"
-    spec.write_text(textwrap.dedent("""\
-        from tabletop import *
-        table = Table on Vector3D(0, 0, 0), with width 1.8, with length 1.2, with height 0.75
-        class Arm(Robot):
-            model: "arm.xml"
-        arm = Arm on (top back table).position + Vector3D(0, 0.25, 0), with joint "elbow" 1.0
-        c1 = Cube completely on table
-        """))
+    spec = _spec(tmp_path, "arm.xml", 'with joint "elbow" 1.0', objects="c1 = Cube completely on table\n")
     done = _prsc("compile", str(spec), "-n", "1", "--target", "json,mjcf", "-o", str(tmp_path / "out"))
     assert done.returncode == 0, done.stderr
     root = tmp_path / "out" / "arm"
@@ -465,14 +458,7 @@ def test_the_box_is_the_files_at_the_joint_values_the_spec_sets(tmp_path, joints
     import mujoco
 
     (tmp_path / "arm.xml").write_text(MJCF_ARM)
-    spec = tmp_path / "arm.prs"
-    spec.write_text(textwrap.dedent(f"""\
-        from tabletop import *
-        table = Table on Vector3D(0, 0, 0), with width 1.8, with length 1.2, with height 0.75
-        class Arm(Robot):
-            model: "arm.xml"
-        arm = Arm on (top back table).position + Vector3D(0, 0.25, 0), {joints}
-        """))
+    spec = _spec(tmp_path, "arm.xml", joints, objects="")
     done = _prsc("compile", str(spec), "-n", "1", "--target", "json,mjcf", "-o", str(tmp_path / "out"))
     assert done.returncode == 0, done.stderr
     root = tmp_path / "out" / "arm"
