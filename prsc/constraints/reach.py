@@ -16,6 +16,7 @@ import functools
 import json
 from dataclasses import replace
 from pathlib import Path
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -43,38 +44,43 @@ def reach_file(model: str) -> Path:
     return DATA / f"{model}_reach.json"
 
 
-def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarray, np.ndarray]:
-    """R's reach rows in its base frame, the base's position and R's rotation.
-
-    The base is the root body of an arm from a file, else the bottom centre of R's box."""
-    if not isinstance(robot, ObjectValue):
-        raise PrscError("'reachable by' needs a robot object", span)
-    model = model_of(robot.props, robot.class_name)
+def local_ring(props: Mapping[str, Any], class_name: str, name: str,
+               span: Span | None) -> tuple[ReachRing, np.ndarray | None]:
+    """A robot's reach rows in its base frame, and its root in its box from the box centre
+    (None: the base is the box's bottom centre, the built-in Panda's), from its properties."""
+    model = model_of(props, class_name)
     if names_asset_file(model):
         from prsc.constraints.arm_reach import arm_reach
 
         asset = describe_asset(str(model))
         if not asset.has_joints:
-            raise PrscError(f"'reachable by' needs a robot: {robot.name}'s model {asset.name!r} has no joints", span)
-        tool = robot.props.get("tcp")
+            raise PrscError(f"'reachable by' needs a robot: {name}'s model {asset.name!r} has no joints", span)
+        tool = props.get("tcp")
         if isinstance(tool, str) and tool != asset.tcp:
             asset = replace(asset, tcp=tool)  # the spec's tool frame (`with tcp "link"`): its own reach
         try:
             ring = arm_reach(asset).ring
         except ValueError as error:
             # The usual cause is the tool frame: a link whose +z does not point out of the hand.
-            others = ", ".join(repr(name) for name in (*asset.sites, *asset.links[-3:]) if name != asset.tcp)
-            raise PrscError(f"'reachable by' {robot.name}: {error}, with the tool frame {asset.tcp!r} pointing "
+            others = ", ".join(repr(link) for link in (*asset.sites, *asset.links[-3:]) if link != asset.tcp)
+            raise PrscError(f"'reachable by' {name}: {error}, with the tool frame {asset.tcp!r} pointing "
                             f"its +z down; name the tool with `with tcp \"NAME\"` (a link or site of the file: "
                             f"{others})", span) from None
-        offset = np.array(robot.props.get(ROOT_OFFSET, asset.root_offset), dtype=float)
-    else:
-        found = reach_ring(model) if isinstance(model, str) else None
-        if found is None:
-            raise PrscError(f"'reachable by' needs a robot (the Panda, or an arm from a URDF or MJCF file: "
-                            f"docs/assets.md); {robot.name}'s model is {model!r}", span)
-        ring = found
-        offset = None
+        return ring, np.array(props.get(ROOT_OFFSET, asset.root_offset), dtype=float)
+    found = reach_ring(model) if isinstance(model, str) else None
+    if found is None:
+        raise PrscError(f"'reachable by' needs a robot (the Panda, or an arm from a URDF or MJCF file: "
+                        f"docs/assets.md); {name}'s model is {model!r}", span)
+    return found, None
+
+
+def _placed_ring(robot: object, span: Span | None) -> tuple[ReachRing, np.ndarray, np.ndarray]:
+    """R's reach rows in its base frame, the base's position and R's rotation.
+
+    The base is the root body of an arm from a file, else the bottom centre of R's box."""
+    if not isinstance(robot, ObjectValue):
+        raise PrscError("'reachable by' needs a robot object", span)
+    ring, offset = local_ring(robot.props, robot.class_name, robot.name, span)
     if robot.position is None or robot.rotation is None or robot.dims is None:
         raise PrscError(f"{robot.name} is not placed yet here", span)
     rot = robot.rotation

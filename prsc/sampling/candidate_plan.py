@@ -15,6 +15,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from prsc.constraints.model import ConstraintProgram
+from prsc.constraints.reach import local_ring
 from prsc.constraints.values import DIMENSIONS
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable, _const
@@ -68,8 +69,6 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
     for index, rt in enumerate(runtimes):
         plan = rt.plan
         name = plan.name
-        if plan.exclusions:
-            raise Unbatchable(f"{name} has excluded cells (`not visible from`, `reachable by`)")
         if rt.after_position and rt.provider.mode != "static" and rt.provider.point_rule is None:
             raise Unbatchable(f"{name}'s rotation depends on its position, and its region on its rotation")
         if rt.allow_static is None:
@@ -88,6 +87,7 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
         )
         objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles, toward))
         requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
+        requires += [(index, _outside_test(rule, name, decls, placed)) for rule in plan.exclusions]
         for rule in (r for r in plan.rules if r.kind == "require") if region.kind == "rectangle" else ():
             # A require lowered to rows that read no position of its own is a test on the scene, the same.
             condition = conditions.get(rule.label_id)
@@ -146,6 +146,31 @@ def _reads_position(expr: Any, name: str) -> bool:
     if isinstance(expr, ir.Expr):
         return any(_reads_position(getattr(expr, f.name), name) for f in fields(expr))
     return False
+
+
+def _outside_test(rule: Any, name: str, decls: dict[str, Any], placed: Placed) -> Test:
+    """`reachable by R`'s excluded cell (the hole about R's base, or the gap) as a test: the
+    candidate's centre outside the cell's interior, R's reach rows moved to each candidate's R."""
+    robot = rule.args[0] if rule.args else None
+    if rule.kind != "unreachable" or rule.soft is not None or not isinstance(robot, ir.ObjectRef) \
+            or robot.name not in placed.bounds:
+        raise Unbatchable(f"{name} has an excluded cell other than a placed robot's reach (`not visible from`)")
+    decl = decls[robot.name]
+    props = {key: value.value for key, value in decl.properties if isinstance(value, ir.Const)}
+    ring, offset = local_ring(props, decl.class_name, robot.name, rule.span)
+    a_local, b_local = ring.excluded()[rule.option("part")]
+
+    def outside(state) -> np.ndarray:
+        rotation, position = state.rotations[robot.name], state.positions[robot.name]
+        if offset is not None:
+            base = position + np.einsum("nij,j->ni", rotation, offset)
+        else:  # the Panda's base: the bottom centre of its box
+            base = position - rotation[:, :, 2] * state.dims[robot.name][:, 2:3] * 0.5
+        local = np.einsum("nji,nj->ni", rotation, state.positions[name] - base)  # R^T (p - base)
+        # Inside the interior: strictly inside every row (the sampler keeps the boundary).
+        return ~np.all(local @ a_local.T < b_local - 1e-9, axis=1)
+
+    return outside
 
 
 def _require_test(compiler: CandidateCompiler, condition: ir.Expr, soft: int | None) -> Test:

@@ -31,6 +31,7 @@ def test_which_specs_candidate_rounds_draw():
     assert compile_sampler(TRAY).candidates
     assert compile_sampler(REPO / "specs" / "facing_toward.prs").candidates
     assert compile_sampler(REPO / "specs" / "camera_view.prs").candidates
+    assert compile_sampler(REPO / "specs" / "table_cube_reach.prs").candidates  # `reachable by`: hole and gap tested
     stack = compile_sampler(REPO / "specs" / "stack_and_cube.prs")
     assert not stack.candidates and "stably" in stack.no_candidates_because
     assert not compile_sampler(BIN, law="sequential").candidates  # only the joint law
@@ -104,3 +105,51 @@ def test_pair_overlaps_is_the_sat_of_each_pair():
     want = [projection_overlaps(ca[i], ra[i], ha[i], cb[i:i + 1], rb[i:i + 1], hb[i:i + 1]).min() for i in range(n)]
     assert np.allclose(got, want, atol=1e-12)
     assert 0.1 < np.mean(got > 0) < 0.9  # both colliding and separated pairs
+
+
+REACH_SPEC = """\
+from tabletop import *
+table = Table on Vector3D(0, 0, 0), with width 1.8, with length 1.2, with height 0.75
+arm = Robot on (top back table).position + Vector3D(0, 0.25, 0)
+cube = Cube completely on table, reachable by arm
+"""
+
+
+def _reach_draws(scenes: list[dict]) -> np.ndarray:
+    """The cube's x and y in each scene."""
+    return np.array([next(o for o in s["objects"] if o["name"] == "cube")["position"][:2] for s in scenes])
+
+
+def test_reachable_by_is_uniform_on_the_table_within_the_ring_less_its_hole(tmp_path):
+    """`reachable by`'s excluded cells are candidate tests: the cube is uniform on the table's top
+    within the outer cell and out of the hole about the base. The reference is numpy's own
+    rejection from the table's top against the ring (reach_ring.contains); the same test fails
+    for the law that forgets the hole (drawn the same way), so it can fail."""
+    from scipy.stats import ks_2samp
+
+    from prsc.constraints.reach import reach_ring
+    from prsc.constraints.reach_ring import contains
+
+    spec = tmp_path / "reach.prs"
+    spec.write_text(REACH_SPEC)
+    sampler = compile_sampler(spec)
+    assert sampler.candidates
+    drawn = _reach_draws(sampler.batch(3, list(range(2000))))
+    scene = sampler.scene(3, 0)
+    objects = {o["name"]: o for o in scene["objects"]}
+    arm, cube, table = objects["arm"], objects["cube"], objects["table"]
+    rotation = quat_to_matrix(arm["quaternion"])
+    base = np.asarray(arm["position"]) - rotation[:, 2] * arm["dimensions"][2] / 2
+    half = (np.asarray(table["dimensions"][:2]) - np.asarray(cube["dimensions"][:2])) / 2
+    rng = np.random.default_rng(5)
+    points = np.column_stack([rng.uniform(-half, half, (200_000, 2)), np.full(200_000, cube["position"][2])])
+    local = (points - base) @ rotation
+    ring = reach_ring("panda")
+    empty = (np.array([[0.0, 0.0, 0.0]]), np.array([-1.0]))  # a cell no point is in
+    no_hole = type(ring)(ring.a, ring.b, *empty, *empty)
+    for law, expected in ((ring, True), (no_hole, False)):
+        reference = points[contains(law, local), :2][:4000]
+        assert len(reference) == 4000
+        pvalues = [ks_2samp(drawn[:, k], reference[:, k]).pvalue for k in range(2)]
+        pvalues.append(ks_2samp(np.hypot(*(drawn - base[:2]).T), np.hypot(*(reference - base[:2]).T)).pvalue)
+        assert (min(pvalues) >= 0.01) == expected, (expected, pvalues)
