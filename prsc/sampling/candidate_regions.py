@@ -3,7 +3,8 @@ given the objects before it, as the rejection reference draws it (docs/sampling.
 "Candidate rounds"). Decided once per spec by the candidate plan (candidate_plan.py):
 - **fixed**: the same in every candidate (every rule static), drawn by its exact sampler;
 - **carried**: one region translated with an earlier object (a camera above the bin), when
-  the static rows provably never cut it (the batched sampler's proof, batched.py);
+  the static rows provably never cut it (the batched sampler's proof, batched.py), or when
+  they are too many to cut per candidate (a reach ring's), then tested per candidate;
 - **affine**: for an object of fixed size and rotation, rows carried by an earlier object
   and cut by static rows, solved once for the affine set their equalities leave (a point,
   a segment or a polygon per candidate);
@@ -14,36 +15,32 @@ given the objects before it, as the rejection reference draws it (docs/sampling.
 - **rectangle**: `[completely] on`/`in` an earlier object of fixed size (its top face or its
   container floor), shrunk by the footprint's support along its sides when `completely`,
   when the workspace provably holds it; cut by the object's directions and fixed or carried
-  rows into a convex polygon.
+  rows into a convex polygon (candidate_cuts.py), rows too many to cut tested instead.
 Anything else is Unbatchable.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from prsc.constraints.model import Rule
-from prsc.constraints.specifiers import DIRECTION_AXES, interior_of
+from prsc.constraints.specifiers import interior_of
 from prsc.constraints.values import ObjectValue, RegionValue
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.sampler import UniformSampler
-from prsc.constraints.visibility import camera_frustum
 from prsc.ir import model as ir
-from prsc.ir.models import model_of
 from prsc.sampling.batch_values import BatchValue, Unbatchable
 from prsc.sampling.batched import carried_corners, rows_hold
-from prsc.sampling.candidate_rules import constant_region, constant_value_of, support
-from prsc.sampling.candidate_values import CandidateCompiler, CandidateState
+from prsc.sampling.candidate_cuts import MAX_CUT_ROWS, Cut, Placed, rule_cut, tested_not_cut
+from prsc.sampling.candidate_rules import constant_region, constant_value_of
+from prsc.sampling.candidate_values import CandidateCompiler
 from prsc.sampling.runtime import ObjectRuntime
 
-# Rows a.p <= b of each candidate on its own centre: (a (n, m, 3), b (n, m)).
-Cut = Callable[[CandidateState], tuple[np.ndarray, np.ndarray]]
 _RECTANGLE = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])  # Interior.edges' normals of a box
 
 
@@ -90,6 +87,7 @@ class Region:
     at: BatchValue | None = None  # point: `at V`, V random
     plane: Plane | None = None  # surface: the plane and its rows
     rows: Polytope | None = None  # point: the fixed rows V must meet
+    tested: Polytope | None = None  # carried: static rows each candidate's centre is tested against
 
     @property
     def uniforms(self) -> int:
@@ -101,15 +99,6 @@ class Region:
         if self.sampler is not None:
             return self.sampler.dim + 1
         return 3 if self.cuts or self.plane is not None else 2
-
-
-@dataclass(frozen=True)
-class Placed:
-    """What the plan knows of the objects before the one being planned."""
-
-    runtimes: dict[str, ObjectRuntime]
-    bounds: dict[str, tuple[np.ndarray, np.ndarray]]  # bounds of the centre in every candidate
-    reaches: dict[str, float]  # bound of the box's half diagonal
 
 
 def object_region(rt: ObjectRuntime, placed: Placed, reach: float, compiler: CandidateCompiler
@@ -155,10 +144,15 @@ def _carried(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.
     prepared = provider.anchored_prepared
     if prepared is None or prepared.sampler is None or anchor not in placed.bounds:
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut, or is a point")
-    carried = carried_corners(prepared.sampler, corners(*placed.bounds[anchor]), provider.static_rows)
-    if carried is None:
+    static = provider.static_rows
+    carried = carried_corners(prepared.sampler, corners(*placed.bounds[anchor]), static)
+    if carried is not None:
+        return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
+    if static is None or len(static.d) or len(static.b) <= MAX_CUT_ROWS:
         raise Unbatchable(f"{name}'s region carried by {anchor} may be cut by its static rows")
-    return Region("carried", prepared.sampler, anchor=anchor), carried.min(axis=0), carried.max(axis=0)
+    # Rows too many to cut per candidate (a reach ring's): drawn on the carried region, then tested.
+    carried = carried_corners(prepared.sampler, corners(*placed.bounds[anchor]), None)
+    return Region("carried", prepared.sampler, anchor=anchor, tested=static), carried.min(axis=0), carried.max(axis=0)
 
 
 def _affine(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.ndarray]:
@@ -183,6 +177,8 @@ def _affine(rt: ObjectRuntime, placed: Placed) -> tuple[Region, np.ndarray, np.n
         origin, shift, basis = np.zeros(3), np.zeros((3, 3)), np.eye(3)
     if basis.shape[1] > 2:
         raise Unbatchable(f"{name}'s carried region is solid and cut by its static rows")
+    if len(carried.b) + len(static.b) > MAX_CUT_ROWS:
+        raise Unbatchable(f"{name}'s carried region is cut by {len(static.b)} static rows")
     # Inequalities: A (origin + shift t + B z - t) <= b and A' (origin + shift t + B z) <= b'.
     a = np.vstack([carried.A, static.A])
     b_z = np.concatenate([carried.b - carried.A @ origin, static.b - static.A @ origin])
@@ -224,7 +220,8 @@ def _rectangle(rt: ObjectRuntime, placed: Placed, reach: float, compiler: Candid
     if len(surfaces) != 1:
         kinds = sorted({r.kind for r in rt.plan.rules})
         raise Unbatchable(f"{name}'s region ({', '.join(kinds)}) is not on one object")
-    cuts = tuple(_cut(r, rt, placed, compiler) for r in rt.plan.rules if r.kind not in ("on", "workspace", "require"))
+    cuts = tuple(rule_cut(r, rt, placed, compiler) for r in rt.plan.rules
+                 if r.kind not in ("on", "workspace", "require") and not tested_not_cut(r))
     rule = surfaces[0]
     target = rule.args[0]
     if isinstance(target, ir.SurfaceRef):
@@ -287,79 +284,6 @@ def _surface(rt: ObjectRuntime, rule: Rule, reach: float, cuts: tuple[Cut, ...])
     basis = np.linalg.svd(normal[None, :])[2][1:].T  # (3, 2): orthonormal, in the plane
     plane = Plane(normal, planes[0], basis, poly.A, poly.b, bool(rule.option("completely")))
     return Region("surface", plane=plane, cuts=cuts), lo - 2 * reach, hi + 2 * reach
-
-
-def _cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompiler) -> Cut:
-    """A rule that cuts the rectangle, as rows per candidate: a direction (specifiers.rows_direction),
-    or rows the compiler fixed for every scene (a static template, or one carried by an anchor for
-    an object of fixed size and rotation)."""
-    me = rt.plan.name
-    template = rule.template
-    if template is not None and (template.anchor is None or rt.support is not None):
-        rows, anchor = template.rows, template.anchor
-        if len(rows.d) or (anchor is not None and anchor not in placed.runtimes):
-            raise Unbatchable(f"{me}'s `{rule.kind}` rows are equalities or carried by a later object")
-        a, b = rows.A, rows.b
-
-        def fixed(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
-            n = len(state.keys)
-            shift = 0.0 if anchor is None else state.positions[anchor] @ a.T
-            return np.broadcast_to(a, (n,) + a.shape), np.broadcast_to(b + shift, (n, len(b)))
-
-        return fixed
-    if rule.kind == "visible":
-        return _visible(rule, me, placed)
-    if rule.kind != "direction":
-        raise Unbatchable(f"{me}'s `{rule.kind}` rule")
-    target = rule.args[0]
-    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
-        raise Unbatchable(f"{me} is placed relative to something other than an object placed before it")
-    by = compiler.compile(rule.args[1]) if len(rule.args) > 1 else None
-    up_to = compiler.compile(rule.args[2]) if len(rule.args) > 2 else None
-    if any(v is not None and v.vector for v in (by, up_to)):
-        raise Unbatchable(f"{me}'s distance from {target.name} is a vector")
-    if by is not None and up_to is not None and not up_to.lo[0] > by.hi[0]:
-        raise Unbatchable(f"{me}'s band beside {target.name} may be a line")  # a segment, not a polygon
-    axis, other = DIRECTION_AXES[rule.option("relation")], target.name
-
-    def direction(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
-        # n.(p - X) >= d + s(n), and <= e + s(n) with `by (d, e)`.
-        n = state.rotations[other] @ axis
-        base = np.einsum("ni,ni->n", n, state.positions[other]) \
-            + support(n[:, None, :], state.rotations[me], state.dims[me] * 0.5)[:, 0]
-        low = base if by is None else base + by.fn(state)[:, 0]
-        if up_to is None:
-            return -n[:, None, :], -low[:, None]
-        return np.stack([-n, n], axis=1), np.stack([-low, base + up_to.fn(state)[:, 0]], axis=1)
-
-    return direction
-
-
-def _visible(rule: Rule, me: str, placed: Placed) -> Cut:
-    """`visible from C`: a.p <= b - s(a) for the six planes of C's frustum, placed where C is in each
-    candidate (visibility.rows_visible); C's size and camera properties are the same in every scene."""
-    target = rule.args[0]
-    if not isinstance(target, ir.ObjectRef) or target.name not in placed.runtimes:
-        raise Unbatchable(f"{me} is visible from something other than an object placed before it")
-    camera = placed.runtimes[target.name]
-    plan = camera.plan
-    if camera.dims is None or set(plan.property_fns) - set(plan.static_props):
-        raise Unbatchable(f"{plan.name}'s size or camera properties change between scenes")
-    value = ObjectValue(plan.name, plan.class_name, plan.span, None, None, camera.dims, dict(plan.static_props), plan.property_fns)
-    if not (value.props.get("camera") or model_of(value.props, value.class_name) == "camera"):
-        raise Unbatchable(f"{plan.name} is no camera")  # the scalar sampler explains it
-    try:
-        a_local, b_local = camera_frustum(value, plan.span).local_rows()
-    except PrscError:
-        raise Unbatchable(f"{plan.name}'s frustum is not valid") from None
-    name = plan.name
-
-    def visible(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
-        a = np.einsum("mj,nij->nmi", a_local, state.rotations[name])  # a R^T per candidate (Frustum.world_rows)
-        b = b_local + np.einsum("nmi,ni->nm", a, state.positions[name])
-        return a, b - support(a, state.rotations[me], state.dims[me] * 0.5)
-
-    return visible
 
 
 def _interior(carrier: ObjectRuntime, rule: Rule) -> Interior | None:

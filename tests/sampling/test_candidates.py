@@ -153,3 +153,24 @@ def test_reachable_by_is_uniform_on_the_table_within_the_ring_less_its_hole(tmp_
         pvalues = [ks_2samp(drawn[:, k], reference[:, k]).pvalue for k in range(2)]
         pvalues.append(ks_2samp(np.hypot(*(drawn - base[:2]).T), np.hypot(*(reference - base[:2]).T)).pvalue)
         assert (min(pvalues) >= 0.01) == expected, (expected, pvalues)
+
+
+def test_a_carried_region_tested_against_a_reach_ring_follows_the_gibbs_sweeps():
+    """table_cube_reach's cube is carried by its tray and cut by the Panda's ring, whose hundred
+    rows are tested per candidate rather than cut (candidate_cuts.MAX_CUT_ROWS): its positions
+    and the target tray's follow the Gibbs sweeps' (KS per coordinate, fixed seeds)."""
+    from scipy.stats import ks_2samp
+
+    spec = REPO / "specs" / "table_cube_reach.prs"
+    sampler = compile_sampler(spec)
+    assert sampler.candidates
+    drawn = sampler.batch(4, list(range(2000)))
+    gibbs = compile_sampler(spec, batched=False)
+    reference = [gibbs.scene(5, k) for k in range(300)]
+
+    def coordinate(scenes, name, k):
+        return [next(o for o in s["objects"] if o["name"] == name)["position"][k] for s in scenes]
+
+    pvalues = [ks_2samp(coordinate(drawn, name, k), coordinate(reference, name, k)).pvalue
+               for name in ("c1", "tr_1", "tr_2") for k in range(2)]
+    assert min(pvalues) >= 0.01, pvalues
