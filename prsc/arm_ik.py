@@ -47,10 +47,13 @@ class ArmFrames:
             tool_id, is_site = model.site(tool).id, True
         except KeyError:
             tool_id, is_site = model.body(tool).id, False
+        low, high = model.jnt_range[ids, 0], model.jnt_range[ids, 1]
+        # A range narrower than both margins (gym-aloha's vx300s has one) is held at its middle.
+        middle = (low + high) / 2
         return ArmFrames(
             qpos=model.jnt_qposadr[ids].copy(), dofs=model.jnt_dofadr[ids].copy(),
-            lower=np.where(limited, model.jnt_range[ids, 0] + LIMIT_MARGIN, -np.inf),
-            upper=np.where(limited, model.jnt_range[ids, 1] - LIMIT_MARGIN, np.inf),
+            lower=np.where(limited, np.minimum(low + LIMIT_MARGIN, middle), -np.inf),
+            upper=np.where(limited, np.maximum(high - LIMIT_MARGIN, middle), np.inf),
             tool=tool_id, tool_is_site=is_site,
         )
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from prsc.arm_ik import ArmFrames, _cross, solve_top_down
 
@@ -57,3 +58,20 @@ def test_a_facing_solve_points_down_and_turns_the_given_axis_onto_the_direction(
         position, rotation = arm.tool_pose(data)
         assert np.linalg.norm(position - [0.35, 0.1, 0.1]) < 0.002
         assert rotation[2, 2] < -math.cos(0.02) and rotation[:, 0] @ direction > math.cos(0.02)
+
+
+def test_a_joint_range_narrower_than_the_margins_is_held_at_its_middle():
+    """gym-aloha's vx300s has a joint whose range is narrower than the two 0.02 margins: its
+    limits were crossed (lower > upper) and drawing random starts raised numpy's ValueError."""
+    import mujoco
+
+    from prsc.arm_ik import ArmFrames, random_starts
+
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><compiler angle="radian"/><worldbody><body><joint name="a" range="-1 1" limited="true"/><geom size="0.1"/>'
+        '<body><joint name="b" type="slide" range="0.01 0.03" limited="true"/><geom size="0.1"/>'
+        '<site name="tool"/></body></body></worldbody></mujoco>')
+    arm = ArmFrames.of(model, ["a", "b"], "tool")
+    assert arm.lower.tolist() == pytest.approx([-0.98, 0.02]) and arm.upper.tolist() == pytest.approx([0.98, 0.02])
+    starts = random_starts(arm, np.array([0.0, 0.02]), 4)
+    assert all(-0.98 <= q[0] <= 0.98 and q[1] == pytest.approx(0.02) for q in starts)
