@@ -23,6 +23,7 @@ RESTARTS = 4  # starts drawn within the joint limits where home's fail: a 7-join
 # home alone misses a third of the points it reaches top-down (KUKA iiwa: 109 of 150 found)
 STALL_ITERATIONS = 20  # a solve whose error has not fallen by STALL_GAIN in this many steps has stalled
 STALL_GAIN = 0.01  # (at a joint limit or a singular pose); most failing solves stall, and ran 80 steps
+BELOW_BASE = 0.02  # m a link's origin may sink below the base's: UR arms' elbow-down answers went 0.2 m into the table
 LIMIT_MARGIN = 0.02  # rad or m kept from every joint limit: a simulated servo held against its
 # limit stops short of it (the limit constraint is soft), so a pose at a limit would miss.
 
@@ -37,6 +38,8 @@ class ArmFrames:
     upper: np.ndarray
     tool: int  # site id or body id
     tool_is_site: bool
+    bodies: tuple[int, ...] = ()  # the bodies the joints move (each joint's body)
+    base: int = 0  # the body the first joint's body hangs from: the arm's base
 
     @staticmethod
     def of(model, joints: list[str], tool: str) -> "ArmFrames":
@@ -55,7 +58,14 @@ class ArmFrames:
             lower=np.where(limited, np.minimum(low + LIMIT_MARGIN, middle), -np.inf),
             upper=np.where(limited, np.maximum(high - LIMIT_MARGIN, middle), np.inf),
             tool=tool_id, tool_is_site=is_site,
+            bodies=tuple(int(model.jnt_bodyid[j]) for j in ids), base=int(model.body_parentid[model.jnt_bodyid[ids[0]]]),
         )
+
+    def above_base(self, data) -> bool:
+        """Whether every body the joints move has its origin above the base's, less BELOW_BASE
+        (after kinematics): an arm standing on a table keeps its links out of the table."""
+        floor = data.xpos[self.base, 2] - BELOW_BASE
+        return bool(all(data.xpos[body, 2] >= floor for body in self.bodies))
 
     def heading(self, data, root: np.ndarray) -> float:
         """The azimuth of the tool about the point `root` (the arm's root) in `data` (after kinematics)."""
@@ -160,8 +170,16 @@ def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarr
     starts += random_starts(arm, home, restarts)
     for start in starts:
         q, ok = solve_top_down(model, data, arm, above, start)
-        if ok:
+        if ok and arm.above_base(data):
             q, ok = solve_top_down(model, data, arm, goal, q)
-            if ok:
-                return q, True
+            if ok and arm.above_base(data):
+                return nearest_turn(q, home, arm), True
     return seed, False
+
+
+def nearest_turn(q: np.ndarray, home: np.ndarray, arm: ArmFrames) -> np.ndarray:
+    """`q` with every joint turned by whole turns to the value nearest home that its limits allow:
+    the same pose, which a servo reaches without swinging the arm round (a UR's 5.27 rad is -1.01)."""
+    turns = np.round((home - q) / (2 * math.pi))
+    turned = q + 2 * math.pi * turns
+    return np.where((turned >= arm.lower) & (turned <= arm.upper), turned, q)

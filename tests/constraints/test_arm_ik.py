@@ -75,3 +75,33 @@ def test_a_joint_range_narrower_than_the_margins_is_held_at_its_middle():
     assert arm.lower.tolist() == pytest.approx([-0.98, 0.02]) and arm.upper.tolist() == pytest.approx([0.98, 0.02])
     starts = random_starts(arm, np.array([0.0, 0.02]), 4)
     assert all(-0.98 <= q[0] <= 0.98 and q[1] == pytest.approx(0.02) for q in starts)
+
+
+def test_a_pose_with_a_link_below_the_base_is_refused_and_angles_come_nearest_home():
+    """UR arms' top-down answers put the elbow 0.2 m into the table the arm stands on, or turned a
+    joint by a whole turn (5.27 rad for -1.01), which a servo swings the arm round to reach."""
+    import mujoco
+
+    from prsc.arm_ik import ArmFrames, nearest_turn, reach_top_down
+
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><compiler angle="radian"/><worldbody><body name="base" pos="0 0 0.5"><geom size="0.05"/>'
+        '<body name="upper"><joint name="shoulder" axis="0 1 0" range="-6.3 6.3" limited="true"/>'
+        '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>'
+        '<body name="fore" pos="0.3 0 0"><joint name="elbow" axis="0 1 0" range="-3 3" limited="true"/>'
+        '<geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>'
+        '<body name="hand" pos="0.3 0 0"><joint name="wrist" axis="0 1 0" range="-3 3" limited="true"/>'
+        '<geom size="0.02"/><site name="tool" pos="0 0 0"/></body></body></body></body></worldbody></mujoco>')
+    data = mujoco.MjData(model)
+    arm = ArmFrames.of(model, ["shoulder", "elbow", "wrist"], "tool")
+    for shoulder, above in ((0.5, False), (-0.5, True)):  # +y turns the arm's +x down
+        data.qpos[:] = [shoulder, 0.0, 0.0]
+        mujoco.mj_kinematics(model, data)
+        assert arm.above_base(data) is above
+    home = np.array([-0.3, 0.6, 1.2])
+    assert nearest_turn(np.array([5.27, 0.2, 0.3]), home, arm)[0] == pytest.approx(5.27 - 2 * math.pi)
+    # A point beside the base at its height: every answer keeps the links above the base.
+    q, ok = reach_top_down(model, data, arm, np.array([0.35, 0.0, 0.5]), home, home, 0.12, restarts=8)
+    data.qpos[:] = q
+    mujoco.mj_kinematics(model, data)
+    assert ok and arm.above_base(data)
