@@ -75,6 +75,8 @@ class RobotModel:
             parent = body.parent
             if parent is not None and parent.name and parent.name != "world":
                 spec.add_exclude(bodyname1=parent.name, bodyname2=body.name)
+        for first, second in self._touching_at_home(spec):
+            spec.add_exclude(bodyname1=first, bodyname2=second)
         if self.passive:
             # Furniture: its joints move when something pushes or pulls them, damped.
             for joint in spec.joints:
@@ -105,6 +107,24 @@ class RobotModel:
                     servo.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
                     servo.forcerange = list(effort)
         return spec
+
+    def _touching_at_home(self, spec) -> list[tuple[str, str]]:
+        """Pairs of the asset's bodies in contact at its home pose: a file whose home folds one
+        link onto another (dm_control's Jaco, robosuite's Panda) would push them apart for ever,
+        so such pairs do not collide, as its own simulator's self-collision filters have it."""
+        import mujoco
+
+        model = spec.compile()
+        data = mujoco.MjData(model)
+        for name, value in self.home().items():
+            data.qpos[model.jnt_qposadr[model.joint(name).id]] = value
+        mujoco.mj_forward(model, data)
+        pairs = set()
+        for contact in data.contact[:data.ncon]:
+            bodies = sorted((model.body(model.geom_bodyid[contact.geom1]).name, model.body(model.geom_bodyid[contact.geom2]).name))
+            if bodies[0] != bodies[1] and "world" not in bodies:
+                pairs.add(tuple(bodies))
+        return sorted(pairs)  # type: ignore[return-value]
 
     @property
     def prim_name(self) -> str:

@@ -471,3 +471,49 @@ def test_the_box_is_the_files_at_the_joint_values_the_spec_sets(tmp_path, joints
     centre, half = np.asarray(arm["position"]), np.asarray(arm["dimensions"]) / 2
     assert np.allclose(low, centre - half, atol=1e-6) and np.allclose(high, centre + half, atol=1e-6)
     assert low[2] == pytest.approx(0.75, abs=1e-6)  # on the table's top, not in it, not above it
+
+
+FOLDED_ARM = """\
+<mujoco model="folded">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="pedestal">
+      <geom type="box" size="0.08 0.08 0.05" pos="0 0 0.05"/>
+      <body name="upper" pos="0 0 0.1">
+        <joint name="shoulder" axis="0 1 0" range="-2 2"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.3" size="0.03"/>
+        <body name="fore" pos="0 0 0.3">
+          <joint name="elbow" axis="0 1 0" range="-3 3"/>
+          <geom type="capsule" fromto="0 0 0 0 0 -0.29" size="0.03"/>
+          <site name="tcp" pos="0 0 -0.29"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="shoulder" joint="shoulder" kp="400" kv="40"/>
+    <position name="elbow" joint="elbow" kp="200" kv="20"/>
+  </actuator>
+  <keyframe><key name="home" qpos="0.0 0.0"/></keyframe>
+</mujoco>
+"""
+
+
+def test_links_that_touch_at_home_do_not_push_each_other_away(tmp_path):
+    """The forearm folded down along the upper arm reaches into the pedestal, its grandparent (as
+    dm_control's Jaco folds link 4 onto link 2): that pair does not collide, so the arm holds home."""
+    import mujoco
+
+    (tmp_path / "arm.xml").write_text(FOLDED_ARM)
+    spec = _spec(tmp_path, "arm.xml", "with joint \"elbow\" 0.0", objects="")
+    done = _prsc("compile", str(spec), "-n", "1", "--target", "json,mjcf", "-o", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "arm" / "mjcf" / "00000.xml"))
+    data = mujoco.MjData(model)
+    pairs = {tuple(sorted(model.body(b).name for b in (model.exclude_signature[k] >> 16, model.exclude_signature[k] & 0xFFFF)))
+             for k in range(model.nexclude)}
+    assert ("arm/fore", "arm/pedestal") in pairs
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    while data.time < 1.0:
+        mujoco.mj_step(model, data)
+    assert np.abs(data.qpos[[model.joint("arm/shoulder").qposadr[0], model.joint("arm/elbow").qposadr[0]]]).max() < 0.02
