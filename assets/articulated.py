@@ -48,8 +48,13 @@ class RobotModel:
     servo_joints: tuple[str, ...]  # joints the file's own position servos hold; prsc gives the others servos
     passive: bool = False  # not a robot (no `tcp`: a cabinet): joints only damped, no servos, no gravity compensation
 
-    def mount_position(self, dimensions: tuple[float, float, float]) -> tuple[float, float, float]:
-        """The root frame in the object's (box centre) frame."""
+    def mount_position(self, dimensions: tuple[float, float, float],
+                       placed: Sequence[float] | None = None) -> tuple[float, float, float]:
+        """The root frame in the object's (box centre) frame: `placed`, where the IR put it in the
+        object's box (its `rootOffset`, at the object's joint values), else the file's at home,
+        else (the Panda) the box's bottom centre."""
+        if placed is not None:
+            return tuple(float(v) for v in placed)  # type: ignore[return-value]
         if self.root_offset is None:
             return (0.0, 0.0, -dimensions[2] / 2)
         return self.root_offset

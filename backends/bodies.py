@@ -65,13 +65,9 @@ class Body:
 
     @property
     def mount_position(self) -> tuple[float, float, float]:
-        """The robot's root frame in the object frame: where the IR put it in the object's box
-        (a file asset, at the object's joint values), else the Panda's (the box's bottom centre)."""
+        """The robot's root frame in the object frame (RobotModel.mount_position)."""
         assert self.robot is not None
-        offset = self.obj.properties.get(ROOT_OFFSET)
-        if offset is not None:
-            return tuple(float(v) for v in offset)  # type: ignore[return-value]
-        return self.robot.mount_position(self.obj.dimensions)
+        return self.robot.mount_position(self.obj.dimensions, self.obj.properties.get(ROOT_OFFSET))
 
 
 def reset_model_warnings() -> None:

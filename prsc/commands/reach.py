@@ -131,12 +131,17 @@ def panda_ring(rays: dict, angles: list[float]) -> ReachRing:
 _reach: TopDownReach | None = None  # one per worker process: its IK model is compiled once
 
 
-def _ray_job(_shared: None, ray: tuple[int, int]) -> tuple[float, float] | None:
-    """One ray's reached run: (height index, ray index) (a worker's item)."""
+def _worker_reach() -> TopDownReach:
+    """This process's TopDownReach, built on first use."""
     global _reach
     _reach = _reach or TopDownReach()
+    return _reach
+
+
+def _ray_job(_shared: None, ray: tuple[int, int]) -> tuple[float, float] | None:
+    """One ray's reached run: (height index, ray index) (a worker's item)."""
     k, j = ray
-    return ray_interval(_reach, _angles()[j], HEIGHTS[k])
+    return ray_interval(_worker_reach(), _angles()[j], HEIGHTS[k])
 
 
 def compute(jobs: int = 1) -> dict:
@@ -203,9 +208,7 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02,
 
 def _reaches_job(_shared: None, point: tuple[float, float, float]) -> bool:
     """Whether the Panda's tool reaches one point (a worker's item)."""
-    global _reach
-    _reach = _reach or TopDownReach()
-    return _reach.reaches(np.array(point))
+    return _worker_reach().reaches(np.array(point))
 
 
 def panda_edge_check(step: float = 0.01, band: float = 0.02, jobs: int = 1) -> dict:

@@ -46,15 +46,33 @@ def tested_not_cut(rule: Rule) -> bool:
     return rule.template is not None and len(rule.template.rows.b) > MAX_CUT_ROWS
 
 
-def inside_test(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompiler):
-    """A rule's rows as a test of each candidate's centre (the rows `rule_cut` would cut with)."""
-    rows, name = rule_cut(rule, rt, placed, compiler), rt.plan.name
-
+def rows_test(a: np.ndarray, b: np.ndarray, name: str, anchor: str | None = None):
+    """Rows a.p <= b (moved with `anchor`'s centre when carried) on each candidate's centre, as a test."""
     def inside(state: CandidateState) -> np.ndarray:
-        a, b = rows(state)
-        return np.all(np.einsum("nrj,nj->nr", a, state.positions[name]) <= b + 1e-9, axis=1)
+        shift = 0.0 if anchor is None else state.positions[anchor] @ a.T
+        return np.all(state.positions[name] @ a.T <= b + shift + 1e-9, axis=1)
 
     return inside
+
+
+def inside_test(rule: Rule, rt: ObjectRuntime, placed: Placed):
+    """A rule's fixed rows (those `rule_cut` would cut with) as a test of each candidate's centre."""
+    found = _template_rows(rule, rt, placed)
+    if found is None:
+        raise Unbatchable(f"{rt.plan.name}'s `{rule.kind}` rows are carried by an object of random size or rotation")
+    rows, anchor = found
+    return rows_test(rows.A, rows.b, rt.plan.name, anchor)
+
+
+def _template_rows(rule: Rule, rt: ObjectRuntime, placed: Placed):
+    """(rows, anchor) of a rule the compiler fixed for every scene (a static template, or one carried
+    by an anchor for an object of fixed size and rotation); None for other rules."""
+    template = rule.template
+    if template is None or (template.anchor is not None and rt.support is None):
+        return None
+    if len(template.rows.d) or (template.anchor is not None and template.anchor not in placed.runtimes):
+        raise Unbatchable(f"{rt.plan.name}'s `{rule.kind}` rows are equalities or carried by a later object")
+    return template.rows, template.anchor
 
 
 def rule_cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateCompiler) -> Cut:
@@ -62,12 +80,9 @@ def rule_cut(rule: Rule, rt: ObjectRuntime, placed: Placed, compiler: CandidateC
     or rows the compiler fixed for every scene (a static template, or one carried by an anchor for
     an object of fixed size and rotation)."""
     me = rt.plan.name
-    template = rule.template
-    if template is not None and (template.anchor is None or rt.support is not None):
-        rows, anchor = template.rows, template.anchor
-        if len(rows.d) or (anchor is not None and anchor not in placed.runtimes):
-            raise Unbatchable(f"{me}'s `{rule.kind}` rows are equalities or carried by a later object")
-        a, b = rows.A, rows.b
+    found = _template_rows(rule, rt, placed)
+    if found is not None:
+        a, b, anchor = found[0].A, found[0].b, found[1]
 
         def fixed(state: CandidateState) -> tuple[np.ndarray, np.ndarray]:
             n = len(state.keys)

@@ -19,7 +19,7 @@ from prsc.constraints.reach import local_ring
 from prsc.constraints.values import DIMENSIONS
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable, _const
-from prsc.sampling.candidate_cuts import Placed, inside_test, tested_not_cut
+from prsc.sampling.candidate_cuts import Placed, inside_test, rows_test, tested_not_cut
 from prsc.sampling.candidate_regions import Region, object_region
 from prsc.sampling.candidate_rules import Test
 from prsc.sampling.candidate_values import CandidateCompiler
@@ -90,9 +90,9 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
         requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
         requires += [(index, _outside_test(rule, name, decls, placed)) for rule in plan.exclusions]
         if region.tested is not None:
-            requires.append((index, _rows_test(region.tested, name)))
+            requires.append((index, rows_test(region.tested.A, region.tested.b, name)))
         if region.kind in ("rectangle", "surface"):
-            requires += [(index, inside_test(rule, rt, placed, compiler)) for rule in plan.rules if tested_not_cut(rule)]
+            requires += [(index, inside_test(rule, rt, placed)) for rule in plan.rules if tested_not_cut(rule)]
         for rule in (r for r in plan.rules if r.kind == "require") if region.kind == "rectangle" else ():
             # A require lowered to rows that read no position of its own is a test on the scene, the same.
             condition = conditions.get(rule.label_id)
@@ -151,12 +151,6 @@ def _reads_position(expr: Any, name: str) -> bool:
     if isinstance(expr, ir.Expr):
         return any(_reads_position(getattr(expr, f.name), name) for f in fields(expr))
     return False
-
-
-def _rows_test(rows: Any, name: str) -> Test:
-    """Fixed rows A p <= b on each candidate's centre, as a test."""
-    a, b = rows.A, rows.b + 1e-9
-    return lambda state: np.all(state.positions[name] @ a.T <= b, axis=1)
 
 
 def _outside_test(rule: Any, name: str, decls: dict[str, Any], placed: Placed) -> Test:
