@@ -28,7 +28,7 @@ test: $(STAMP)
 demo: $(STAMP)
 	$(PRSC) check specs/table_cube.prs
 	$(PRSC) compile specs/table_cube.prs --target mjcf -n 8 --seed 0 -o out/demo --force
-	$(PY) -m prsc.backends.settle_report out/demo/table_cube/mjcf/00000.xml
+	$(PY) -m prsc.runner.settle_report out/demo/table_cube/mjcf/00000.xml
 	$(PRSC) preview specs/table_cube.prs -n 8 --seed 0 -o out/demo/table_cube_sheet.png
 	@echo "scenes: out/demo/table_cube/mjcf/*.xml   contact sheet: out/demo/table_cube_sheet.png"
 

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.assets.urdf_tree import RobotTree, read_urdf
-from prsc.asset_files import ArticulatedAsset, AssetJoint, asset_spec, describe_asset, names_asset_file, resolve_asset_file
+from prsc.user_assets.asset_files import ArticulatedAsset, AssetJoint, asset_spec, describe_asset, names_asset_file, resolve_asset_file
 from prsc.errors import PrscError
 from prsc.files import atomic_write
 
@@ -197,7 +197,7 @@ def _urdf_path(model: RobotModel) -> Path:
     if not target.is_file():
         target.parent.mkdir(parents=True, exist_ok=True)
         if Path(model.source).suffix.lower() == ".urdf":
-            from prsc.asset_files import urdf_with_absolute_paths
+            from prsc.user_assets.asset_files import urdf_with_absolute_paths
 
             text = urdf_with_absolute_paths(Path(model.source), model.folders)
         else:

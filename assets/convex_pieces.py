@@ -15,7 +15,7 @@ from pathlib import Path
 from prsc.assets.panda import build_dir
 from prsc.errors import PrscError
 from prsc.files import atomic_write_tree
-from prsc.mesh_paths import load_mesh, obj_text
+from prsc.user_assets.mesh_paths import load_mesh, obj_text
 
 SETTINGS = {"threshold": 0.05, "preprocess_mode": "auto", "max_convex_hull": -1, "seed": 0}
 """CoACD's own defaults (concavity threshold 0.05 of the mesh size), with a fixed seed."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from prsc.assets.parts import Part, box
-from prsc.geometry.furniture import SHELF_BOARDS, shelf_layout
+from prsc.geometry.furniture_surfaces import SHELF_BOARDS, shelf_layout
 
 
 def chair_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
@@ -24,7 +24,7 @@ def chair_parts(dimensions: tuple[float, float, float]) -> tuple[Part, ...]:
 
 def shelf_parts(dimensions: tuple[float, float, float], boards: int = SHELF_BOARDS) -> tuple[Part, ...]:
     """A bookshelf open towards +y: two sides, a back panel and `boards` evenly spaced boards
-    (prsc.geometry.furniture.shelf_layout: the same numbers `on shelf.boards[k]` rests on)."""
+    (prsc.geometry.furniture_surfaces.shelf_layout: the same numbers `on shelf.boards[k]` rests on)."""
     layout = shelf_layout(dimensions, boards)
     w, l, h = layout.dimensions
     t = layout.thickness

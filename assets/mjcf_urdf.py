@@ -51,7 +51,7 @@ def _origin(parent: ET.Element, position, rotation: np.ndarray | None = None) ->
 
 def _mesh_file(model, mesh_id: int, folder: Path) -> Path:
     """The compiled mesh as an OBJ file in `folder` (written once per content)."""
-    from prsc.mesh_paths import obj_text
+    from prsc.user_assets.mesh_paths import obj_text
 
     start, count = model.mesh_vertadr[mesh_id], model.mesh_vertnum[mesh_id]
     face_start, face_count = model.mesh_faceadr[mesh_id], model.mesh_facenum[mesh_id]

@@ -101,7 +101,7 @@ def _repo_root() -> Path:
 
 def build_dir() -> Path:
     """The asset build folder: `$PRSC_BUILD_DIR/assets`, default `<repo>/build/assets`."""
-    from prsc.asset_files import build_root
+    from prsc.user_assets.asset_files import build_root
 
     return build_root() / "assets"
 
@@ -135,7 +135,7 @@ def _collision_hull(link: ET.Element):
     """The convex hull (trimesh) of a link's collision meshes in the link frame, or None."""
     import trimesh
 
-    from prsc.mesh_paths import read_trimesh
+    from prsc.user_assets.mesh_paths import read_trimesh
 
     parts = []
     for collision in link.findall("collision"):
@@ -235,7 +235,7 @@ def _clean_visual_meshes(tree: ET.ElementTree, folder: Path) -> dict[str, str]:
     """
     import trimesh
 
-    from prsc.mesh_paths import read_trimesh
+    from prsc.user_assets.mesh_paths import read_trimesh
 
     mapping = {}
     for visual in tree.getroot().iter("visual"):

@@ -13,7 +13,7 @@ import re
 from typing import Callable
 
 from prsc.assets.camera_body import camera_parts
-from prsc.assets.containers import container_parts
+from prsc.assets.open_containers import container_parts
 from prsc.assets.furniture import chair_parts, shelf_parts
 from prsc.assets.parts import Part
 from prsc.assets.solids import bottle_parts, cube_parts, cylinder_parts

@@ -129,7 +129,7 @@ def set_pose(xformable, matrix: np.ndarray) -> None:
 
 def _mesh_prim(stage, path: str, filename: str, origin: np.ndarray, scale, rgba=None):
     """A UsdGeom.Mesh converted from a mesh file with trimesh."""
-    from prsc.mesh_paths import read_trimesh
+    from prsc.user_assets.mesh_paths import read_trimesh
     from pxr import Gf, UsdGeom, Vt
 
     mesh = read_trimesh(filename, force="mesh")

@@ -8,17 +8,17 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.assets.containers import container_parts
+from prsc.assets.open_containers import container_parts
 from prsc.assets.parts import Part, box, cylinder, sphere
 from prsc.assets.articulated import RobotModel, robot_model
 from prsc.assets.registry import part_recipe
-from prsc.asset_files import ROOT_OFFSET, names_asset_file
+from prsc.user_assets.asset_files import ROOT_OFFSET, names_asset_file
 from prsc.backends.inertia import Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore, pbr_maps, texture_of
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior, declared_interior
-from prsc.mesh_paths import MESH_COLLISIONS, TEXTURED_SHAPES, mesh_folders, resolve_mesh
+from prsc.user_assets.mesh_paths import MESH_COLLISIONS, TEXTURED_SHAPES, mesh_folders, resolve_mesh
 
 CAMERA_QUAT_NEG_Z = (0.7071067811865476, 0.7071067811865476, 0.0, 0.0)
 """Rotation (w x y z, object frame) of a camera that looks along its local -Z with +Y up

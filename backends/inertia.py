@@ -37,7 +37,7 @@ def mesh_properties(path: str) -> MeshProperties:
     """Mass properties of a normalised mesh file; its convex hull when it is not a solid."""
     import trimesh
 
-    from prsc.mesh_paths import read_trimesh
+    from prsc.user_assets.mesh_paths import read_trimesh
 
     loaded = read_trimesh(path, force="mesh")
     # Geometry only: a textured mesh repeats vertices along its UV seams, merged here into one solid.

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-from prsc.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
+from prsc.user_assets.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies

@@ -16,7 +16,7 @@ from typing import Sequence
 from prsc.assets.articulated import RobotModel
 from prsc.files import atomic_copy, atomic_write, is_temporary_name
 from prsc.errors import PrscError
-from prsc.mesh_paths import load_mesh, obj_text
+from prsc.user_assets.mesh_paths import load_mesh, obj_text
 
 
 def relative_path(target: Path | str, start: Path | str) -> str:
@@ -112,7 +112,7 @@ class AssetStore:
         """The store's PNG copy of an image `with texture` names (`textures/<stem>-<hash>.png`)."""
         import io
 
-        from prsc.mesh_paths import read_image
+        from prsc.user_assets.mesh_paths import read_image
 
         try:
             stat = os.stat(source)
@@ -168,7 +168,7 @@ def pbr_maps(texture: str | None) -> tuple[tuple[str, str], ...]:
     PBR_MAPS order (none for a `with texture` image or an untextured part). Cached: every
     scene asks, and the maps are written before the mesh's OBJ, whose content-hashed name
     the image's carries, so a name once seen never gains or loses a map."""
-    from prsc.mesh_paths import PBR_MAPS
+    from prsc.user_assets.mesh_paths import PBR_MAPS
 
     if texture is None:
         return ()
@@ -198,7 +198,7 @@ def _normalise_mesh_obj(source: Path, up_axis: str, stem: str) -> tuple[bytes, b
 
     import numpy as np
 
-    from prsc.mesh_paths import base_color_image, pbr_images
+    from prsc.user_assets.mesh_paths import base_color_image, pbr_images
 
     mesh = load_mesh(source, up_axis)
     low, high = mesh.bounds

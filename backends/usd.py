@@ -153,7 +153,7 @@ def _mesh_usd(obj_path: str) -> Path:
 
     target = Path(obj_path).with_suffix(".usda")
     if not target.is_file():
-        from prsc.mesh_paths import read_trimesh
+        from prsc.user_assets.mesh_paths import read_trimesh
         from pxr import Gf, Sdf, Usd, UsdGeom, Vt
 
         textured = texture_of(obj_path) is not None

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 def in_memory_root() -> Path:
     """Where in-memory models find their meshes: an asset store in the build folder
     (`$PRSC_BUILD_DIR/in-memory`, beside the converted robot assets)."""
-    from prsc.asset_files import build_root
+    from prsc.user_assets.asset_files import build_root
 
     return build_root() / "in-memory"
 

@@ -46,7 +46,7 @@ class SceneEnv(gymnasium.Env):
         include_dirs: Sequence[str | os.PathLike[str]] = (),
     ) -> None:
         if render_mode == "rgb_array":
-            from prsc.backends.runner.gl import choose_gl_backend
+            from prsc.runner.gl import choose_gl_backend
 
             choose_gl_backend()  # headless rendering: MuJoCo reads MUJOCO_GL when first imported
         import mujoco

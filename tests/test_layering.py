@@ -2,15 +2,17 @@
 functions and under TYPE_CHECKING: a type named across a layer is a dependency too).
 
 - A stage imports only earlier stages: syntax -> ir -> constraints -> sampling -> commands,
-  with geometry/ (pure math: numpy, highspy and the standard library) below them all.
+  with geometry/ (pure math: numpy, highspy and the standard library) below them all and
+  user_assets/ (the user's URDF, MJCF and mesh files, LANGUAGE.md section 7) just above it.
 - The parser (syntax/) knows no semantics: lark, the standard library and prsc.errors.
 - Backends (and the asset recipes they read) never import spec text's stages, the IR or
   prsc.commands: they read scene JSON and asset descriptions.
-- The library API (prsc/scenario.py, prsc/scene_env.py) joins sampling and the backends;
-  commands may use it, it never uses commands.
+- The MuJoCo runner (runner/) steps what the backends wrote; it reads scene JSON, never spec text.
+- The library API (prsc/scenario.py, prsc/scene_env.py) joins sampling, the backends and the
+  runner; pipeline/ (executors, campaigns, output folders) serves the subcommands (commands/).
 - No import cycles between modules. Three were broken and stay forbidden by name:
   ir/constructors <-> ir/expressions, the engine <-> Gibbs object cycle, and `commands`
-  reading its own manifest through backends/settle_check.
+  reading its own manifest through runner/settle_check.
 """
 
 from __future__ import annotations
@@ -24,18 +26,22 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 ROOTS = {"prsc": REPO / "prsc", "prsc.backends": REPO / "backends", "prsc.assets": REPO / "assets"}
-FOUNDATION = {"prsc.errors", "prsc.files", "prsc.limits", "prsc.mesh_paths", "prsc.asset_files", "prsc.urdf_source", "prsc.asset_inertia", "prsc.asset_links", "prsc.asset_scale", "prsc.cabinet_urdf", "prsc.arm_ik"}  # used by every layer
+FOUNDATION = {"prsc.errors", "prsc.files", "prsc.limits"}  # what every layer may use: errors, atomic files, size limits
 ALLOWED = {  # layer -> the layers it may import, besides itself and FOUNDATION
     "syntax": set(),
-    "ir": {"syntax"},
     "geometry": set(),
-    "constraints": {"ir", "geometry"},
-    "sampling": {"ir", "geometry", "constraints"},
-    "assets": {"geometry"},
-    "backends": {"geometry", "assets"},
+    "user_assets": {"geometry"},
+    "ir": {"syntax", "user_assets"},
+    "constraints": {"ir", "geometry", "user_assets"},
+    "sampling": {"ir", "geometry", "constraints", "user_assets"},
+    "assets": {"geometry", "user_assets"},
+    "backends": {"geometry", "user_assets", "assets"},
+    "runner": {"geometry", "user_assets", "assets", "backends"},
     "library": set(),
-    "api": {"syntax", "ir", "geometry", "constraints", "sampling", "assets", "backends"},
-    "commands": {"syntax", "ir", "geometry", "constraints", "sampling", "assets", "backends", "api"},
+    "api": {"syntax", "ir", "geometry", "constraints", "sampling", "user_assets", "assets", "backends", "runner"},
+    "pipeline": {"syntax", "ir", "geometry", "constraints", "sampling", "user_assets", "assets", "backends", "runner", "api"},
+    "commands": {"syntax", "ir", "geometry", "constraints", "sampling", "user_assets", "assets", "backends", "runner", "api",
+                 "pipeline"},
     "foundation": set(),
 }
 PURE_MATH = {"numpy", "highspy", "__future__"} | set(sys.stdlib_module_names)
@@ -85,6 +91,8 @@ def _layer(module: str) -> str:
     if module in API:
         return "api"
     parts = module.split(".")
+    if parts[:2] == ["prsc", "backends"] or parts[:2] == ["prsc", "assets"]:
+        return parts[1]
     return parts[1] if len(parts) > 1 and parts[1] in ALLOWED else module
 
 
@@ -118,7 +126,8 @@ def test_the_broken_cycles_stay_broken(edge):
 
 def test_backends_never_read_a_commands_manifest():
     """Which scenes an output folder holds is prsc.commands' business (output_folder.compiled_scenes)."""
-    readers = [p.name for p in (REPO / "backends").rglob("*.py") if "manifest.json" in p.read_text()]
+    readers = [p.name for folder in (REPO / "backends", REPO / "prsc" / "runner")
+               for p in folder.rglob("*.py") if "manifest.json" in p.read_text()]
     assert readers == []
 
 

@@ -60,7 +60,7 @@ def add_parser(subparsers: Any) -> None:
                         help="time `prsc run` episodes instead: CPU s per episode and where it goes (default -n 21)")
     parser.add_argument("--resets", action="store_true",
                         help="time RL resets instead: scenario.apply against a model compiled per scene (default -n 200)")
-    parser.add_argument("--controller", default="prsc.backends.runner.handover:handover", metavar="TARGET",
+    parser.add_argument("--controller", default="prsc.runner.handover:handover", metavar="TARGET",
                         help="with --episodes: the controller (default the handover)")
 
 

@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from prsc.commands.executors import cpu_seconds
+from prsc.pipeline.executors import cpu_seconds
 
 
 def _count_files(folder: Path) -> int:

@@ -41,18 +41,18 @@ def _timed(module, name: str, totals: Counter, key: str):
 
 def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
     """Run n episodes (the first as warm-up); CPU totals of the others."""
-    from prsc.backends.runner.gl import choose_gl_backend
+    from prsc.runner.gl import choose_gl_backend
 
     gl_backend = choose_gl_backend()
     import mujoco
 
-    from prsc.backends.runner import harness, rendering
-    from prsc.backends.runner.controller import parse_target
-    from prsc.backends.runner.tasks import DEFAULT_MAX_SIM_SECONDS
-    from prsc.backends.runner.worker import WorkerConfig
-    from prsc.commands.campaign import episode_tasks, run_episodes
+    from prsc.runner import harness, rendering
+    from prsc.runner.controller import parse_target
+    from prsc.runner.episode_records import DEFAULT_MAX_SIM_SECONDS
+    from prsc.runner.worker import WorkerConfig
+    from prsc.pipeline.campaign import episode_tasks, run_episodes
     from prsc.commands.compile import compile_scenes
-    from prsc.commands.executors import make_executor
+    from prsc.pipeline.executors import make_executor
 
     # One worker in this process (a local executor of one job runs inline), as `prsc run`'s workers run them.
     executor, config = make_executor("local", 1), WorkerConfig(gl_backend)

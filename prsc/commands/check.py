@@ -37,7 +37,7 @@ def summarise(program) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Check every file as far as `compile` goes before sampling; report each error; 2 if any file has one."""
-    from prsc.commands.static_checks import compile_checked
+    from prsc.pipeline.static_checks import compile_checked
 
     failed = 0
     for path in args.files:

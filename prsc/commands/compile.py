@@ -11,8 +11,8 @@ file; a re-run with the same spec and seed skips the scenes already written. FIL
 also be scene JSON (a `.json` document or `.jsonl` lines, e.g. from `prsc sample`).
 
 One run at a time writes a folder, and prsc deletes only files its manifest lists
-(prsc.commands.output_folder); it writes a changed spec or seed into a folder of other
-scenes only with --force. Scenes come from prsc.commands.scene_sources.
+(prsc.pipeline.output_folder); it writes a changed spec or seed into a folder of other
+scenes only with --force. Scenes come from prsc.pipeline.scene_sources.
 """
 
 from __future__ import annotations
@@ -29,15 +29,15 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
-from prsc.commands.executors import Executor, LocalExecutor, add_executor_arguments, make_executor, worker_count
-from prsc.commands.output_folder import (
+from prsc.pipeline.executors import Executor, LocalExecutor, add_executor_arguments, make_executor, worker_count
+from prsc.pipeline.output_folder import (
     CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
     lock_folder, output_root, prepare_root, remove_listed, write_manifest,
 )
-from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, proposal_key
-from prsc.commands.scene_job import Job, render_one, worker_render
-from prsc.commands.scene_sources import read_input, read_proposal, read_scene_file
-from prsc.commands.progress import progress_bar
+from prsc.pipeline.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, proposal_key
+from prsc.pipeline.scene_job import Job, render_one, worker_render
+from prsc.pipeline.scene_sources import read_input, read_proposal, read_scene_file
+from prsc.pipeline.progress import progress_bar
 from prsc.commands.settle import SETTLE_HELP, settle_check, settle_targets
 from prsc.errors import PrscError
 
@@ -158,7 +158,7 @@ def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, 
         # Compile the spec before touching the output folder and before any worker starts:
         # a bad spec leaves nothing behind and its errors point into the spec. (Also before
         # reading it whole for the digest: the parser refuses a huge file after 256 KiB.)
-        from prsc.commands.static_checks import compile_checked
+        from prsc.pipeline.static_checks import compile_checked
 
         compiled = settings.compiled or compile_checked(str(file), settings.include_dirs, law=law,
                                                         proposal=proposal_from_json(settings.proposal))

@@ -175,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
         raise PrscError(f"--json prints the constraints stage (the scene stage is JSON already), not --stage {args.stage}")
     if args.stage == "syntax":
         from prsc.syntax import parse_file
-        from prsc.syntax.format import format_ast
+        from prsc.syntax.ast_text import format_ast
 
         sys.stdout.write(format_ast(parse_file(args.file)))
         return 0

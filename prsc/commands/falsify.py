@@ -24,9 +24,9 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from prsc.commands.executors import add_executor_arguments
-from prsc.commands.tables import print_table
-from prsc.constraints.model import COLLISION
+from prsc.pipeline.executors import add_executor_arguments
+from prsc.pipeline.tables import print_table
+from prsc.constraints.polytope_ir import COLLISION
 from prsc.errors import PrscError
 
 METHODS = ("failure-tree", "cross-entropy", "uniform")
@@ -35,8 +35,8 @@ STRATA_STREAM = 0x5354  # entropy word that keeps a round's offset apart from sc
 
 def add_parser(subparsers: Any) -> None:
     """Register `prsc falsify`."""
-    from prsc.backends.runner.controller import DEFAULT_CONTROLLER
-    from prsc.backends.runner.tasks import DEFAULT_MAX_SIM_SECONDS
+    from prsc.runner.controller import DEFAULT_CONTROLLER
+    from prsc.runner.episode_records import DEFAULT_MAX_SIM_SECONDS
 
     parser = subparsers.add_parser("falsify", help="search a spec for the scenes where a controller fails",
                                    description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -110,16 +110,16 @@ def run(args: argparse.Namespace) -> int:
         raise PrscError(f"--rounds must be >= 1, got {args.rounds}")
     if args.jobs < 1 or args.seed < 0 or not args.max_sim_seconds > 0:
         raise PrscError("--jobs must be >= 1, --seed >= 0 and --max-sim-seconds > 0")
-    from prsc.backends.runner.gl import choose_gl_backend
+    from prsc.runner.gl import choose_gl_backend
 
     gl_backend = choose_gl_backend()  # before anything imports mujoco
     from rich.console import Console
 
-    from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
-    from prsc.backends.runner.worker import WorkerConfig
-    from prsc.commands.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
+    from prsc.runner.controller import declared_outcomes, load_controller, parse_target
+    from prsc.runner.worker import WorkerConfig
+    from prsc.pipeline.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
     from prsc.commands.compile import compile_scenes
-    from prsc.commands.executors import make_executor, worker_count
+    from prsc.pipeline.executors import make_executor, worker_count
     from prsc.commands.falsify_report import write_report
     from prsc.files import atomic_write
     from prsc.sampling import compile_sampler

@@ -80,7 +80,7 @@ def write_report(records: Sequence[dict], proposal: Any, masses: dict, out: Path
     """Write clusters.json, summary.txt and falsify.png; return the summary as a rich Table."""
     from rich.table import Table
 
-    from prsc.backends.runner.report import outcome_counts
+    from prsc.runner.report import outcome_counts
     from prsc.files import atomic_write
 
     clusters = failure_clusters(records)
@@ -107,7 +107,7 @@ def write_report(records: Sequence[dict], proposal: Any, masses: dict, out: Path
 
 def plot_sites(records: Sequence[dict], proposal: Any, masses: dict, path: Path, title: str) -> None:
     """Per site, the learnt proposal's density relative to the spec's law and where episodes failed."""
-    from prsc.backends.runner.report import _pyplot, _save
+    from prsc.runner.report import _pyplot, _save
 
     plt = _pyplot()
     sites = sorted(masses)

@@ -21,7 +21,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from prsc.commands.outputs import output_file, write_error
+from prsc.pipeline.outputs import output_file, write_error
 from prsc.errors import PrscError
 
 TILE = (320, 240)  # width, height of one scene's image
@@ -46,7 +46,7 @@ def add_parser(subparsers: Any) -> None:
 
 def _scenes(file: str, n: int, seed: int, include_dirs: Sequence[str] = ()) -> list[dict]:
     """The first n scenes of a spec (sampled) or of scene JSON (read)."""
-    from prsc.commands.scene_sources import read_scene_file, spec_sampler
+    from prsc.pipeline.scene_sources import read_scene_file, spec_sampler
 
     path = Path(file)
     if path.suffix in (".json", ".jsonl"):
@@ -95,7 +95,7 @@ def render_scene(scene: dict, folder: Path, size: tuple[int, int] = TILE, view: 
     import mujoco
 
     from prsc.backends.mjcf import render
-    from prsc.backends.runner.harness import fresh_data, load_model
+    from prsc.runner.harness import fresh_data, load_model
     from prsc.backends.scene import parse_scene
     from prsc.backends.store import AssetStore
 

@@ -5,7 +5,7 @@ prsc/constraints/panda_reach.json. The constraint stage reads that file and neve
 imports MuJoCo; tests/constraints/test_reach.py checks the file against the IK. (A
 command, not a backend: it drives the runner's IK and, for the tray report, samples a spec.)
 
-Reachable means what the handover controller needs (backends/runner/handover.py): with
+Reachable means what the handover controller needs (prsc/runner/handover.py): with
 the gripper pointing down as at home, the tool centre reaches the point 12 cm above it
 (the approach, sought from home with restarts as the controller seeks it), then moves
 straight down to the point and up 15 cm (the lift) in the controller's 3 cm steps
@@ -57,7 +57,7 @@ class TopDownReach:
 
     def __init__(self) -> None:
         from prsc.assets import panda
-        from prsc.backends.runner.ik import ArmIK
+        from prsc.runner.ik import ArmIK
 
         self.ik = ArmIK(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]))
         self.home = np.array(panda.HOME_QPOS)
@@ -146,7 +146,7 @@ def _ray_job(_shared: None, ray: tuple[int, int]) -> tuple[float, float] | None:
 
 def compute(jobs: int = 1) -> dict:
     """The reachable-set data of the Panda (minutes of IK), its rays scanned by `jobs` processes."""
-    from prsc.commands.executors import LocalExecutor
+    from prsc.pipeline.executors import LocalExecutor
 
     keys = [(k, j) for k in range(len(HEIGHTS)) for j in range(SECTORS)]
     return reach_data(dict(zip(keys, LocalExecutor(jobs).map(_ray_job, None, keys))))
@@ -177,8 +177,8 @@ def tray_report(spec: str, tray: str, cube: str, robot: str, step: float = 0.02,
     `step` metres: the fraction in the cell, the fraction the IK reaches, and the
     fraction of the reachable ones the cell keeps (and any cell point the IK misses).
     """
-    from prsc.commands.executors import LocalExecutor
-    from prsc.constraints.reach import reach_ring
+    from prsc.pipeline.executors import LocalExecutor
+    from prsc.constraints.reach_rows import reach_ring
     from prsc.sampling import compile_sampler
 
     scene = compile_sampler(spec).scene(0, 0)
@@ -214,8 +214,8 @@ def _reaches_job(_shared: None, point: tuple[float, float, float]) -> bool:
 def panda_edge_check(step: float = 0.01, band: float = 0.02, jobs: int = 1) -> dict:
     """Every point the shipped ring keeps within `band` of its edge, on a `step` grid at the
     lowest and highest height, against the IK: the points where the ring is most likely wrong."""
-    from prsc.commands.executors import LocalExecutor
-    from prsc.constraints.reach import reach_ring
+    from prsc.pipeline.executors import LocalExecutor
+    from prsc.constraints.reach_rows import reach_ring
 
     ring = reach_ring("panda")
     assert ring is not None
@@ -234,8 +234,8 @@ def panda_edge_check(step: float = 0.01, band: float = 0.02, jobs: int = 1) -> d
 def panda_coverage(step: float = 0.03, jobs: int = 1) -> dict:
     """What the shipped ring keeps of the Panda's true top-down reach at its base's height: the
     IK (TopDownReach, as the controller seeks a pose) at every point of a grid about the base."""
-    from prsc.commands.executors import LocalExecutor
-    from prsc.constraints.reach import reach_ring
+    from prsc.pipeline.executors import LocalExecutor
+    from prsc.constraints.reach_rows import reach_ring
 
     ring = reach_ring("panda")
     assert ring is not None
@@ -275,7 +275,7 @@ def run(args) -> int:
     """Build (or read from the cache) the arm's reach and print what it keeps of the true reach."""
     import time
 
-    from prsc.asset_files import describe_asset
+    from prsc.user_assets.asset_files import describe_asset
     from prsc.constraints.arm_reach import HEIGHTS, arm_reach, reach_cache
     from prsc.errors import PrscError
 

@@ -21,9 +21,9 @@ from contextlib import nullcontext
 from pathlib import Path
 from typing import Any
 
-from prsc.commands.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
-from prsc.commands.executors import add_executor_arguments, cpu_seconds
-from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, read_proposal
+from prsc.pipeline.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
+from prsc.pipeline.executors import add_executor_arguments, cpu_seconds
+from prsc.pipeline.scene_sources import add_law_argument, add_proposal_argument, read_proposal
 from prsc.errors import PrscError
 
 STRIPS = "strips.json"  # in failures/: the strips prsc wrote there, the only ones it replaces
@@ -31,8 +31,8 @@ STRIPS = "strips.json"  # in failures/: the strips prsc wrote there, the only on
 
 def add_parser(subparsers) -> None:
     """Register `prsc run`."""
-    from prsc.backends.runner.controller import DEFAULT_CONTROLLER
-    from prsc.backends.runner.tasks import DEFAULT_MAX_SIM_SECONDS
+    from prsc.runner.controller import DEFAULT_CONTROLLER
+    from prsc.runner.episode_records import DEFAULT_MAX_SIM_SECONDS
 
     parser = subparsers.add_parser(
         "run",
@@ -62,7 +62,7 @@ def add_parser(subparsers) -> None:
 def _scenes_to_check(source: Path, count: int | None, seed: int, compiled: Any) -> list[dict]:
     """The scenes a controller's `check` sees before anything is written: every scene of a JSON
     input, the first of a spec (all scenes of a spec have the same objects and classes)."""
-    from prsc.commands.scene_sources import read_scene_file
+    from prsc.pipeline.scene_sources import read_scene_file
 
     if compiled is None:
         return read_scene_file(source)[:count or None]
@@ -99,19 +99,19 @@ def _validate(args: argparse.Namespace) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the episodes and report; exit code 0 whatever the outcomes, 2 on an infrastructure fault."""
     _validate(args)
-    from prsc.backends.runner.gl import choose_gl_backend
+    from prsc.runner.gl import choose_gl_backend
 
     # Before anything imports mujoco: MuJoCo fixes its GL backend at import.
     gl_backend = choose_gl_backend()
     from rich.console import Console
 
-    from prsc.backends.runner.controller import declared_outcomes, load_controller, parse_target
-    from prsc.backends.runner.worker import WorkerConfig
+    from prsc.runner.controller import declared_outcomes, load_controller, parse_target
+    from prsc.runner.worker import WorkerConfig
     from prsc.commands.compile import MANIFEST, compile_scenes
-    from prsc.commands.executors import make_executor, worker_count
-    from prsc.commands.progress import progress_bar
-    from prsc.commands.scene_sources import proposal_from_json
-    from prsc.commands.static_checks import compile_checked
+    from prsc.pipeline.executors import make_executor, worker_count
+    from prsc.pipeline.progress import progress_bar
+    from prsc.pipeline.scene_sources import proposal_from_json
+    from prsc.pipeline.static_checks import compile_checked
 
     source = Path(args.file)
     proposal = read_proposal(args.proposal, args.file)
@@ -170,8 +170,8 @@ def run(args: argparse.Namespace) -> int:
     ordered = results.finish()  # index order, as a clean run writes
 
     title = f"{source.name}: {len(ordered)} episodes, seed {args.seed}"
-    from prsc.backends.runner.report import plot_outcomes, summary_table
-    from prsc.commands.tables import print_table
+    from prsc.runner.report import plot_outcomes, summary_table
+    from prsc.pipeline.tables import print_table
 
     plot_outcomes(ordered, out / "outcomes.png", title, declared)
     report = getattr(controller, "report", None)
@@ -192,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _write_strips(tasks: list, records: list[dict], out: Path, count: int) -> None:
     """Frame strips of the first `count` episodes whose outcome is not `success` (re-run while recording)."""
-    from prsc.backends.runner.frames import record_episode, write_strip
+    from prsc.runner.frames import record_episode, write_strip
 
     folder = out / "failures"
     for name in _strips_written(folder):

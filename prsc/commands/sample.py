@@ -10,8 +10,8 @@ import argparse
 import sys
 from typing import IO, Any
 
-from prsc.commands.outputs import output_file, write_error
-from prsc.commands.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, read_proposal
+from prsc.pipeline.outputs import output_file, write_error
+from prsc.pipeline.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, read_proposal
 from prsc.errors import PrscError
 
 
@@ -40,7 +40,7 @@ def write_scenes(sampler: Any, seed: int, start: int, n: int, out: IO[str]) -> A
     """Write n scenes as JSON lines; returns the merged rejection statistics."""
     from contextlib import nullcontext
 
-    from prsc.commands.progress import progress_bar
+    from prsc.pipeline.progress import progress_bar
     from prsc.sampling.sampler import BATCH
     from prsc.sampling.scene_text import scene_encoder
     from prsc.sampling.stats import RejectionStats

@@ -22,8 +22,8 @@ def settle_check(root: Path, scenes: int | None, scene_input: bool) -> int:
     scene of a scene-JSON input when not given)."""
     from rich.console import Console
 
-    from prsc.backends.settle_check import report_lines, settle_scenes
-    from prsc.commands.output_folder import compiled_scenes
+    from prsc.runner.settle_check import report_lines, settle_scenes
+    from prsc.pipeline.output_folder import compiled_scenes
 
     indices = range(scenes if scenes else 1) if not scene_input or scenes else None
     results = settle_scenes(compiled_scenes(root, indices))

@@ -3,6 +3,6 @@
 from __future__ import annotations
 
 from prsc.constraints.lower import lower_program
-from prsc.constraints.model import ConstraintProgram, ObjectPlan, RowLabel
+from prsc.constraints.polytope_ir import ConstraintProgram, ObjectPlan, RowLabel
 
 __all__ = ["ConstraintProgram", "ObjectPlan", "RowLabel", "lower_program"]

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from prsc.constraints.evaluate import ExprCompiler, StaticFacts
-from prsc.constraints.model import RegionRules, Rule
+from prsc.constraints.polytope_ir import RegionRules, Rule
 from prsc.constraints.values import static_dims
 from prsc.geometry.polytope import Polytope, intersect
 from prsc.ir import model as ir

@@ -27,12 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, turned
-from prsc.asset_files import ArticulatedAsset, asset_spec, build_root
+from prsc.user_assets.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, turned
+from prsc.user_assets.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "8"  # the IK (prsc/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "8"  # the IK (prsc/user_assets/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees

@@ -6,10 +6,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from prsc.constraints import specifiers as rows
+from prsc.constraints import specifier_rows as rows
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import Rule
-from prsc.constraints.reach import rows_reachable, rows_unreachable
+from prsc.constraints.polytope_ir import Rule
+from prsc.constraints.reach_rows import rows_reachable, rows_unreachable
 from prsc.constraints.stacks import rows_stably
 from prsc.constraints.support import Support
 from prsc.constraints.visibility import rows_visible

@@ -36,7 +36,7 @@ class SceneContext:
         # A falsification proposal's per-scene state (prsc/sampling/proposal.py), or None: the spec's law.
         self.proposal: Any = None
         # The sampler's regions prepared in this scene, by the sampling stage's own keys
-        # (prsc/sampling/regions.py): kept with the scene, so threads sharing a sampler never mix them.
+        # (prsc/sampling/prepared_regions.py): kept with the scene, so threads sharing a sampler never mix them.
         self.prepared: dict[Any, Any] = {}
 
     def uniform(self) -> float:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from prsc.constraints.model import RowLabel
+from prsc.constraints.polytope_ir import RowLabel
 from prsc.errors import PrscError, Span
 from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import irreducible_infeasible_subset

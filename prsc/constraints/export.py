@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from prsc.constraints.model import ConstraintProgram, RowLabel, Rule
+from prsc.constraints.polytope_ir import ConstraintProgram, RowLabel, Rule
 from prsc.errors import Span
 from prsc.geometry.polytope import Polytope
 from prsc.ir.format import format_expr

@@ -18,11 +18,11 @@ from prsc.constraints.analysis import pinned_point, region_rules
 from prsc.constraints.containers import containers_rested_in
 from prsc.constraints.diagnostics import explain_empty, numeric_failure
 from prsc.constraints.evaluate import Fn
-from prsc.constraints.model import EXCLUSION_KINDS, REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
+from prsc.constraints.polytope_ir import EXCLUSION_KINDS, REQUIRE, ConstraintProgram, ObjectPlan, RequireCheck, Rule
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.build import reads_support
 from prsc.constraints.position import specifier_rules, workspace_rule
-from prsc.constraints.specifiers import link_target_error
+from prsc.constraints.specifier_rows import link_target_error
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import POSITION, OrientationRule
+from prsc.constraints.polytope_ir import POSITION, OrientationRule
 from prsc.constraints.regions import rotation_of
 from prsc.constraints.state import LoweringState
 from prsc.constraints.values import ObjectValue, OrientedPoint, as_position

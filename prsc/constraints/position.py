@@ -7,11 +7,11 @@ from typing import Any
 
 import numpy as np
 
-from prsc.constraints import specifiers as rows
+from prsc.constraints import specifier_rows as rows
 from prsc.constraints.analysis import CONST, LOCATED_ARGS, common_anchor, motion
 from prsc.constraints.build import reads_support, rows_from_values
-from prsc.constraints.model import CONTAINMENT, POSITION, RELATIVE, RowTemplate, Rule
-from prsc.constraints.requires import mentioned_objects
+from prsc.constraints.polytope_ir import CONTAINMENT, POSITION, RELATIVE, RowTemplate, Rule
+from prsc.constraints.require_rows import mentioned_objects
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue

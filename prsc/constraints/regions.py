@@ -9,7 +9,7 @@ import numpy as np
 from prsc.constraints.values import LinkValue, ObjectValue, RegionValue, as_position
 from prsc.errors import PrscError, Span
 from prsc.geometry.boxes import Box
-from prsc.geometry.furniture import ASSET_SURFACES, asset_surfaces
+from prsc.geometry.furniture_surfaces import ASSET_SURFACES, asset_surfaces
 from prsc.geometry.kinematics import chain_pose
 from prsc.geometry.link_surfaces import Face, LinkSurfaces
 from prsc.geometry.polytope import Polytope, intersect
@@ -155,7 +155,7 @@ def intersection(regions: Sequence[Any], span: Span | None) -> RegionValue:
 
 def surface(target: Any, name: str, index: Any, span: Span | None) -> RegionValue:
     """`X.name[k]`: support surface k of X's furniture asset, as a rectangle moved to X's pose
-    (prsc.geometry.furniture, the numbers the asset recipe builds)."""
+    (prsc.geometry.furniture_surfaces, the numbers the asset recipe builds)."""
     if not isinstance(target, ObjectValue) or target.position is None or target.rotation is None or target.dims is None:
         raise PrscError(f"{name}[...] needs a placed object", span)
     model = model_of(target.props, target.class_name)
@@ -179,7 +179,7 @@ def surface(target: Any, name: str, index: Any, span: Span | None) -> RegionValu
 def link(target: Any, label: str, chain: Any, surfaces: LinkSurfaces, root_offset: Sequence[float], ctx: Any,
          span: Span | None) -> LinkValue:
     """`X.links["NAME"]`: the link's frame at X's pose and X's joint values in this scene, with
-    its support surface and interior (`chain` is the link's prsc.asset_links.AssetLink)."""
+    its support surface and interior (`chain` is the link's prsc.user_assets.asset_links.AssetLink)."""
     if not isinstance(target, ObjectValue) or target.position is None or target.rotation is None:
         raise PrscError(f"{label} needs a placed object", span)
     joints = {j.name: float(target.get(joint_property(j.name), ctx, span)) for step in chain.chain for j in step.joints}

@@ -11,9 +11,9 @@ import numpy as np
 from prsc.constraints.analysis import rigid
 from prsc.constraints.build import rows_polytope
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import REQUIRE, RequireCheck, RowLabel, RowTemplate, Rule, SoftRequire
+from prsc.constraints.polytope_ir import REQUIRE, RequireCheck, RowLabel, RowTemplate, Rule, SoftRequire
 from prsc.constraints.operations import truthy
-from prsc.constraints.requires import constant_apart_from, implied_condition, lower_condition, mentioned_objects
+from prsc.constraints.require_rows import constant_apart_from, implied_condition, lower_condition, mentioned_objects
 from prsc.constraints.state import LoweringState
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span

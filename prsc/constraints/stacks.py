@@ -20,7 +20,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from prsc.constraints.specifiers import rows_on
+from prsc.constraints.specifier_rows import rows_on
 from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, Span

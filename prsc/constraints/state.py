@@ -8,7 +8,7 @@ import numpy as np
 
 from prsc.constraints.context import SceneContext
 from prsc.constraints.evaluate import ExprCompiler, StaticFacts
-from prsc.constraints.model import RowLabel
+from prsc.constraints.polytope_ir import RowLabel
 from prsc.constraints.values import ObjectValue, static_dims
 from prsc.errors import Span
 from prsc.ir.program import Program

@@ -37,7 +37,7 @@ from prsc.geometry.rotations import (
     yaw_matrix,
     yaw_toward,
 )
-from prsc.geometry.sampler import UniformSampler, prepare_sampler, union_sampler
+from prsc.geometry.uniform_sampling import UniformSampler, prepare_sampler, union_sampler
 
 __all__ = [
     "TOL", "AffineRegion", "reduce_affine",

@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 from prsc.geometry.affine import TOL, AffineRegion, reduce_affine
 from prsc.geometry.exceptions import EmptyRegionError
 from prsc.geometry.polytope import Polytope
-from prsc.geometry.sampler import SLIVER, UniformSampler
+from prsc.geometry.uniform_sampling import SLIVER, UniformSampler
 from prsc.geometry.triangulation import BOUND, VERTEX_TOL, decompose, order_polygon, simplex_measures
 
 _FLAT_ROW = 1e-9

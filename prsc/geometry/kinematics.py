@@ -1,6 +1,6 @@
 """Forward kinematics of a chain of bodies (pure math): where a link of an articulated asset
 is at given joint values. The chain is data read once from the asset's file
-(prsc/asset_links.py); the constraint stage places `X.links["NAME"]` with it."""
+(prsc/user_assets/asset_links.py); the constraint stage places `X.links["NAME"]` with it."""
 
 from __future__ import annotations
 

@@ -9,10 +9,10 @@ from __future__ import annotations
 from dataclasses import fields, replace
 from typing import Sequence
 
-from prsc.asset_files import ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, names_asset_file, resolve_asset_file
-from prsc.asset_links import asset_link
-from prsc.asset_scale import scaled_asset_file
-from prsc.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
+from prsc.user_assets.asset_files import ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, names_asset_file, resolve_asset_file
+from prsc.user_assets.asset_links import asset_link
+from prsc.user_assets.asset_scale import scaled_asset_file
+from prsc.user_assets.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
 from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN, joint_name, joint_property
@@ -21,7 +21,7 @@ from prsc.ir.format import format_expr
 from prsc.ir.program import ClassDef, ObjectDecl, Program
 from prsc.ir.scope import did_you_mean
 from prsc.ir.walk import rebuild, walk
-from prsc.mesh_paths import mesh_folders
+from prsc.user_assets.mesh_paths import mesh_folders
 
 
 def _declared_in(classes: dict[str, ClassDef], class_name: str, prop: str, span) -> str | None:
@@ -81,7 +81,7 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str],
     props = dict(obj.properties)
     factor = _scale_of(obj, props.get("scale"))
     try:
-        # At a scale other than 1 the file is a scaled copy in the build folder (prsc/asset_scale.py).
+        # At a scale other than 1 the file is a scaled copy in the build folder (prsc/user_assets/asset_scale.py).
         path = scaled_asset_file(resolve_asset_file(str(model.value), folders), factor, folders)
         asset = describe_asset(path, folders)
     except PrscError as error:

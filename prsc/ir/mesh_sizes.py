@@ -13,7 +13,7 @@ from prsc.ir.program import ObjectDecl, Program
 from prsc.ir.builtins import BUILTIN_SPAN
 from prsc.ir.checks import SIZES
 from prsc.ir.scope import did_you_mean
-from prsc.mesh_paths import MESH_COLLISIONS, UP_AXES, mesh_extent, mesh_folders, missing_texture_images, resolve_mesh
+from prsc.user_assets.mesh_paths import MESH_COLLISIONS, UP_AXES, mesh_extent, mesh_folders, missing_texture_images, resolve_mesh
 
 
 def _builtin(expr: ir.Expr | None) -> bool:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from prsc.asset_links import AssetLink
+from prsc.user_assets.asset_links import AssetLink
 from prsc.errors import Span
 
 

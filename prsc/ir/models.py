@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
-from prsc.asset_files import names_asset_file
+from prsc.user_assets.asset_files import names_asset_file
 from prsc.errors import PrscError
 
 KNOWN_MODELS = frozenset({"panda", "tray", "table", "cube", "cylinder", "bowl", "cup", "camera"})

@@ -11,7 +11,7 @@ from prsc.errors import PrscError
 from prsc.ir import model as ir
 from prsc.ir.mesh_sizes import constant_strings
 from prsc.ir.program import ObjectDecl, Program
-from prsc.mesh_paths import TEXTURED_SHAPES, mesh_folders, read_image, resolve_mesh
+from prsc.user_assets.mesh_paths import TEXTURED_SHAPES, mesh_folders, read_image, resolve_mesh
 
 
 def _checked(obj: ObjectDecl, texture: ir.Expr, folders: Sequence[str]) -> ObjectDecl:

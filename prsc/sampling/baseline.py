@@ -8,7 +8,7 @@ X`), X's surface without erosion; every other rule is a test on the draw (reject
 from __future__ import annotations
 
 from prsc.constraints.analysis import region_rules
-from prsc.constraints.model import ConstraintProgram, ObjectPlan, RegionRules, RowTemplate, Rule
+from prsc.constraints.polytope_ir import ConstraintProgram, ObjectPlan, RegionRules, RowTemplate, Rule
 
 DRAWN_KINDS = frozenset({"at", "beyond", "aligned"})
 

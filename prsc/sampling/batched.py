@@ -25,12 +25,12 @@ from typing import Any, Sequence
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import ConstraintProgram
+from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.polytope import Polytope
-from prsc.geometry.sampler import UniformSampler
+from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchCompiler, BatchState, BatchValue, Unbatchable
 from prsc.geometry.obb import collides_many

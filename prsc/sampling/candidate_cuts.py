@@ -10,8 +10,8 @@ from typing import Callable
 
 import numpy as np
 
-from prsc.constraints.model import Rule
-from prsc.constraints.specifiers import DIRECTION_AXES
+from prsc.constraints.polytope_ir import Rule
+from prsc.constraints.specifier_rows import DIRECTION_AXES
 from prsc.constraints.values import ObjectValue
 from prsc.constraints.visibility import camera_frustum
 from prsc.errors import PrscError

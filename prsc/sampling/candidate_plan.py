@@ -14,8 +14,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from prsc.constraints.model import ConstraintProgram
-from prsc.constraints.reach import local_ring
+from prsc.constraints.polytope_ir import ConstraintProgram
+from prsc.constraints.reach_rows import local_ring
 from prsc.constraints.values import DIMENSIONS
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable, _const

@@ -25,14 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from prsc.constraints.model import Rule
-from prsc.constraints.specifiers import interior_of
+from prsc.constraints.polytope_ir import Rule
+from prsc.constraints.specifier_rows import interior_of
 from prsc.constraints.values import ObjectValue, RegionValue
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.polytope import Polytope
-from prsc.geometry.sampler import UniformSampler
+from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.ir import model as ir
 from prsc.sampling.batch_values import BatchValue, Unbatchable
 from prsc.sampling.batched import carried_corners, rows_hold

@@ -8,7 +8,7 @@ from typing import Callable
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import Rule
+from prsc.constraints.polytope_ir import Rule
 from prsc.constraints.values import RegionValue
 from prsc.geometry.polytope import Polytope
 from prsc.sampling.batch_values import Unbatchable

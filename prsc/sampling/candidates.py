@@ -25,7 +25,7 @@ from typing import Sequence, Union
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import ConstraintProgram
+from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.polygon import polygon_points

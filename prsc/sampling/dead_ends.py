@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Mapping, Sequence
 
 from prsc.constraints.diagnostics import explain_empty
-from prsc.constraints.model import ObjectPlan, RowLabel
+from prsc.constraints.polytope_ir import ObjectPlan, RowLabel
 from prsc.errors import PrscError, Span
 from prsc.sampling.attempt import Failure
 

@@ -33,13 +33,13 @@ import numpy as np
 
 from prsc.constraints.context import SceneContext
 from prsc.constraints.diagnostics import numeric_failure
-from prsc.constraints.model import COLLISION, CONTAINMENT, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
+from prsc.constraints.polytope_ir import COLLISION, CONTAINMENT, DEAD_END, REQUIRE, ConstraintProgram, RequireCheck
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope
-from prsc.geometry.sampler import UniformSampler
+from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.sampling.attempt import Attempt, Limits
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, inscribed_half, near, obstacles_for
 from prsc.sampling.dead_ends import dead_end_error

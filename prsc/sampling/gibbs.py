@@ -29,7 +29,7 @@ from typing import Protocol
 
 import numpy as np
 
-from prsc.constraints.model import RequireCheck
+from prsc.constraints.polytope_ir import RequireCheck
 from prsc.constraints.support import Support
 from prsc.constraints.values import ObjectValue
 from prsc.geometry.exceptions import EmptyRegionError
@@ -37,7 +37,7 @@ from prsc.sampling.attempt import Attempt
 from prsc.geometry.polytope import Polytope
 from prsc.sampling.collisions import PlacedBox, aabb_reach, first_hit, near, obstacles_for
 from prsc.sampling.prepared import Prepared
-from prsc.sampling.regions import violated_rule
+from prsc.sampling.prepared_regions import violated_rule
 from prsc.sampling.runtime import ObjectRuntime
 
 

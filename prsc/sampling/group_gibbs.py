@@ -27,12 +27,12 @@ from typing import Sequence
 import numpy as np
 
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import ConstraintProgram
+from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError
 from prsc.geometry.obb import CONTACT_TOL, axis_aligned
-from prsc.geometry.sampler import UniformSampler
+from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.candidate_plan import CandidatePlan
 from prsc.sampling.collisions import PlacedBox, apart, collide_pairs, obstacles_for

@@ -12,7 +12,7 @@ from prsc.geometry.exceptions import EmptyRegionError
 from prsc.geometry.free_space import RegionBase, free_space_sampler, region_base
 from prsc.geometry.hit_and_run import hit_and_run
 from prsc.geometry.polytope import Polytope
-from prsc.geometry.sampler import UniformSampler, prepare_sampler
+from prsc.geometry.uniform_sampling import UniformSampler, prepare_sampler
 
 TOL = 1e-9  # metres: feasibility tolerance of a point against its rows
 _BASES = 8  # free-space starts kept per prepared region (by translation)

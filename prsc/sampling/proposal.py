@@ -31,7 +31,7 @@ from prsc.errors import PrscError
 from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.free_space import free_space_sampler
 from prsc.geometry.polytope import Polytope, intersect
-from prsc.geometry.sampler import UniformSampler, prepare_sampler
+from prsc.geometry.uniform_sampling import UniformSampler, prepare_sampler
 
 FORMAT = "prsc-proposal/1"
 DEFAULT_EPS = 0.1  # defensive share of the spec's own law: every scene's weight <= 1 / eps

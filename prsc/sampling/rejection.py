@@ -12,13 +12,13 @@ from __future__ import annotations
 
 from prsc.constraints.context import SceneContext
 from prsc.constraints.diagnostics import numeric_failure
-from prsc.constraints.model import COLLISION, CONTAINMENT, REQUIRE, ConstraintProgram, RequireCheck, RowLabel
+from prsc.constraints.polytope_ir import COLLISION, CONTAINMENT, REQUIRE, ConstraintProgram, RequireCheck, RowLabel
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError, GeometryError, UnboundedRegionError
 from prsc.sampling.baseline import baseline_region
 from prsc.sampling.collisions import PlacedBox, first_hit, near
 from prsc.sampling.engine import SceneResult
-from prsc.sampling.regions import RegionProvider, violated_rule
+from prsc.sampling.prepared_regions import RegionProvider, violated_rule
 from prsc.sampling.runtime import build_runtimes, draw_soft_requires, evaluate_params, inside_any
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats

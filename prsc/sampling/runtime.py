@@ -9,13 +9,13 @@ import numpy as np
 
 from prsc.constraints.build import excluded_cells
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import ConstraintProgram, ObjectPlan
+from prsc.constraints.polytope_ir import ConstraintProgram, ObjectPlan
 from prsc.constraints.orientation import orientation_of
 from prsc.constraints.support import Support
 from prsc.constraints.values import DIMENSIONS, ObjectValue, dimension, static_dims
 from prsc.geometry.polytope import Polytope
 from prsc.sampling.collisions import PlacedBox, aabb_reach
-from prsc.sampling.regions import RegionProvider
+from prsc.sampling.prepared_regions import RegionProvider
 
 # A point counts as inside an excluded cell only this far (m) inside every row: the free-space
 # pieces touch the cells' faces, and a point on a face is out of the (open) cell.

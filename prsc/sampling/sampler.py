@@ -15,7 +15,7 @@ import os
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from prsc.constraints.lower import lower_program
-from prsc.constraints.model import ConstraintProgram
+from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir.program import Program
 from prsc.sampling.batch_values import Unbatchable

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from prsc.constraints.model import CAUSES, DEAD_END
+from prsc.constraints.polytope_ir import CAUSES, DEAD_END
 
 
 @dataclass

@@ -57,7 +57,7 @@ def _alone(path: Path):
     """The asset file compiled alone in MuJoCo, at its home."""
     import mujoco
 
-    from prsc.asset_files import asset_spec
+    from prsc.user_assets.asset_files import asset_spec
 
     model = asset_spec(path, [str(DATA)]).compile()
     data = mujoco.MjData(model)
@@ -68,7 +68,7 @@ def _alone(path: Path):
 
 
 def test_each_box_is_the_file_times_the_scale(compiled):
-    from prsc.asset_files import asset_at, describe_asset
+    from prsc.user_assets.asset_files import asset_at, describe_asset
 
     folder, _, objects = compiled
     for name, source, scale, joints in (("arm", DATA / "xarm/xarm6_robot.urdf", 0.5, {"joint3": -0.6}),

@@ -268,7 +268,7 @@ def _cubes_reached_top_down(root: Path, scenes: int, name: str) -> float:
     top-down on the compiled model (scipy's IK); the farthest cube's distance from the base."""
     import mujoco
 
-    from prsc.asset_files import describe_asset
+    from prsc.user_assets.asset_files import describe_asset
 
     farthest = 0.0
     for k in range(scenes):
@@ -311,7 +311,7 @@ def test_the_reach_check_fails_on_a_cube_out_of_reach(arm_output):
     """The IK above is not vacuous: a point 2 m from the base is not reached."""
     import mujoco
 
-    from prsc.asset_files import describe_asset
+    from prsc.user_assets.asset_files import describe_asset
 
     name, joints, root, scenes = arm_output
     asset = describe_asset(_arm(scenes[0])["model"])
@@ -338,12 +338,12 @@ def test_the_example_spec_compiles_as_its_docstring_says(tmp_path):
 
 
 def test_the_example_controller_drives_every_arm_by_its_own_names(arm_output, tmp_path):
-    """`prsc run --controller prsc.backends.runner.visit:visit` (no Panda constants): the
+    """`prsc run --controller prsc.runner.visit:visit` (no Panda constants): the
     tool visits a point above each reachable cube, under the arm's own servos (a URDF arm's
     from prsc), in every episode."""
     name, _, root, _ = arm_output
     spec = root.parent.parent / "arm.prs"
-    done = _prsc("run", str(spec), "-I", str(DATA), "--controller", "prsc.backends.runner.visit:visit", "-n", "3",
+    done = _prsc("run", str(spec), "-I", str(DATA), "--controller", "prsc.runner.visit:visit", "-n", "3",
                  "-o", str(tmp_path / "run"))
     assert done.returncode == 0, done.stderr
     records = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
@@ -357,7 +357,7 @@ def test_a_spec_tcp_has_its_own_reach_and_the_controller_drives_it(tmp_path):
     top-down by the wrist; the example controller `visit` drives the wrist."""
     import mujoco
 
-    from prsc.asset_files import build_root, describe_asset
+    from prsc.user_assets.asset_files import build_root, describe_asset
 
     (tmp_path / "arm.xml").write_text(MJCF_ARM)
     spec = _spec(tmp_path, "arm.xml", 'with tcp "wrist"')
@@ -372,7 +372,7 @@ def test_a_spec_tcp_has_its_own_reach_and_the_controller_drives_it(tmp_path):
     _cubes_reached_top_down(out / "arm", REACH_SCENES, "lab_arm with tcp wrist")
     # The example controller drives the same frame: after its run, the wrist (not the site
     # 5 cm beyond it) stands at the point above the last cube.
-    from prsc.backends.runner.visit import HOVER, visit
+    from prsc.runner.visit import HOVER, visit
 
     scene = json.loads((out / "arm" / "json" / "00000.json").read_text())
     model = mujoco.MjModel.from_xml_path(str(out / "arm" / "mjcf" / "00000.xml"))
@@ -392,8 +392,8 @@ def test_an_arm_of_torque_motors_holds_its_pose_and_controllers_get_position_ser
     keeps them, and gets gravity compensation and prsc's position servos, which the runner drives."""
     import mujoco
 
-    from prsc.arm_ik import ArmFrames
-    from prsc.backends.runner.arm_scene import SceneArm, servos
+    from prsc.user_assets.arm_ik import ArmFrames
+    from prsc.runner.arm_scene import SceneArm, servos
 
     motors = MJCF_ARM.split("<actuator>")[0] + "<actuator>\n" + "".join(
         f'    <motor name="{j}" joint="{j}" gear="1" ctrlrange="-50 50"/>\n' for j in ("yaw", "pitch", "elbow", "wrist")

@@ -9,8 +9,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from prsc.backends.settle_check import LIMIT, settle_scenes
-from prsc.commands.output_folder import compiled_scenes
+from prsc.runner.settle_check import LIMIT, settle_scenes
+from prsc.pipeline.output_folder import compiled_scenes
 from prsc.cli import main
 from prsc.commands.compile import compile_scenes
 from prsc.ir import compile_program, model as ir

@@ -1,11 +1,11 @@
-"""`python -m prsc.backends.settle_report`: the demo's load-and-step check of a compiled scene."""
+"""`python -m prsc.runner.settle_report`: the demo's load-and-step check of a compiled scene."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
-from prsc.backends.settle_report import main, settle
+from prsc.runner.settle_report import main, settle
 from prsc.cli import main as prsc_main
 
 DATA = Path(__file__).resolve().parents[1] / "data"

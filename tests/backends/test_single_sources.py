@@ -7,7 +7,7 @@ import json
 import mujoco
 
 from prsc.assets.simulation import IMPRATIO, TIMESTEP
-from prsc.backends.runner.harness import load_model
+from prsc.runner.harness import load_model
 from prsc.commands.compile import compile_scenes
 from tests.backends.scenes import table_cube
 

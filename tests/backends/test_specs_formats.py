@@ -15,8 +15,8 @@ import shutil
 
 import pytest
 
-from prsc.backends.settle_check import settle_scenes
-from prsc.commands.output_folder import compiled_scenes
+from prsc.runner.settle_check import settle_scenes
+from prsc.pipeline.output_folder import compiled_scenes
 from tests.backends import readback
 from tests.backends.test_settle_check import completely_on
 from tests.backends.specs import SCENES_PER_SPEC, all_specs, compiled, spec_id

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from prsc.cli import main
-from prsc.commands.scene_job import Job
+from prsc.pipeline.scene_job import Job
 from prsc.sampling import compile_sampler
 
 REPO = Path(__file__).resolve().parents[2]

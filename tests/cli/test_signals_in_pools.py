@@ -1,5 +1,5 @@
 """A SIGTERM or Ctrl-C while local workers run is acted on between results
-(prsc/commands/executors.py, _DeferredSignals): the handler's exception is raised where
+(prsc/pipeline/executors.py, _DeferredSignals): the handler's exception is raised where
 nothing is in flight, the workers end (even a frozen one), and none is left behind; a
 worker's error is raised in the parent, and a worker that dies is an error, not a hang."""
 
@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from prsc.commands.executors import LocalExecutor
+from prsc.pipeline.executors import LocalExecutor
 from prsc.errors import PrscError
 
 

@@ -10,7 +10,7 @@ def test_a_long_table_title_stays_on_one_line_in_a_pipe():
     from rich.console import Console
     from rich.table import Table
 
-    from prsc.commands.tables import print_table
+    from prsc.pipeline.tables import print_table
 
     title = "table_cube.prs: 100 episodes of handover (seed 0), outcome per scene, in a pipe"
     table = Table(title=title)

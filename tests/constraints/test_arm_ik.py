@@ -1,4 +1,4 @@
-"""prsc/arm_ik.py's own arithmetic: its 3-vector cross product is numpy's, bit for bit (the
+"""prsc/user_assets/arm_ik.py's own arithmetic: its 3-vector cross product is numpy's, bit for bit (the
 reach of every arm, cached by file content, must not change with it), and a `facing` solve
 turns the tool's given axis onto the world direction while it points down."""
 
@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from prsc.arm_ik import ArmFrames, _cross, solve_top_down
+from prsc.user_assets.arm_ik import ArmFrames, _cross, solve_top_down
 
 
 def _arm():
@@ -65,7 +65,7 @@ def test_a_joint_range_narrower_than_the_margins_is_held_at_its_middle():
     limits were crossed (lower > upper) and drawing random starts raised numpy's ValueError."""
     import mujoco
 
-    from prsc.arm_ik import ArmFrames, random_starts
+    from prsc.user_assets.arm_ik import ArmFrames, random_starts
 
     model = mujoco.MjModel.from_xml_string(
         '<mujoco><compiler angle="radian"/><worldbody><body><joint name="a" range="-1 1" limited="true"/><geom size="0.1"/>'
@@ -82,7 +82,7 @@ def test_a_pose_with_a_link_below_the_base_is_refused_and_angles_come_nearest_ho
     joint by a whole turn (5.27 rad for -1.01), which a servo swings the arm round to reach."""
     import mujoco
 
-    from prsc.arm_ik import ArmFrames, nearest_turn, reach_top_down
+    from prsc.user_assets.arm_ik import ArmFrames, nearest_turn, reach_top_down
 
     model = mujoco.MjModel.from_xml_string(
         '<mujoco><compiler angle="radian"/><worldbody><body name="base" pos="0 0 0.5"><geom size="0.05"/>'

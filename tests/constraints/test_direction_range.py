@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from prsc.cli import main
-from prsc.constraints.specifiers import DIRECTION_AXES, rows_direction
+from prsc.constraints.specifier_rows import DIRECTION_AXES, rows_direction
 from prsc.constraints.support import Support
 from prsc.ir import compile_program
 from prsc.ir import model as ir

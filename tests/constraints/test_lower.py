@@ -10,9 +10,9 @@ from scipy.stats import binomtest
 
 from prsc.constraints import lower_program
 from prsc.constraints.context import SceneContext
-from prsc.constraints.model import Support
+from prsc.constraints.polytope_ir import Support
 from prsc.constraints.regions import cuboid
-from prsc.constraints.specifiers import rows_in, rows_on
+from prsc.constraints.specifier_rows import rows_in, rows_on
 from prsc.constraints.values import ObjectValue
 from prsc.errors import PrscError, format_error
 from prsc.geometry.rotations import compat_euler_to_matrix

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from prsc.constraints import lower_program
-from prsc.constraints.reach import reach_ring, reach_file
+from prsc.constraints.reach_rows import reach_ring, reach_file
 from prsc.errors import PrscError
 from prsc.geometry.polytope import Polytope
 from prsc.constraints.reach_ring import contains
-from prsc.geometry.sampler import prepare_sampler
+from prsc.geometry.uniform_sampling import prepare_sampler
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
 

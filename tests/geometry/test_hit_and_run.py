@@ -9,7 +9,7 @@ from prsc.geometry.boxes import Box
 from prsc.geometry.hit_and_run import hit_and_run
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.rotations import compat_euler_to_matrix
-from prsc.geometry.sampler import prepare_sampler
+from prsc.geometry.uniform_sampling import prepare_sampler
 
 R = compat_euler_to_matrix(0.4, 0.3, -0.2)
 

@@ -10,7 +10,7 @@ from prsc.geometry.boxes import Box
 from prsc.geometry.exceptions import EmptyRegionError, UnboundedRegionError
 from prsc.geometry.polytope import Polytope
 from prsc.geometry.rotations import compat_euler_to_matrix, rot_z
-from prsc.geometry.sampler import UniformSampler, prepare_sampler, union_sampler
+from prsc.geometry.uniform_sampling import UniformSampler, prepare_sampler, union_sampler
 
 P_MIN = 1e-3
 R = compat_euler_to_matrix(0.4, 0.3, -0.2)
@@ -179,7 +179,7 @@ def test_thin_and_many_row_regions():
 
 def test_fast_path_and_lp_path_agree():
     from prsc.geometry.affine import reduce_affine
-    from prsc.geometry.sampler import simplices_of
+    from prsc.geometry.uniform_sampling import simplices_of
 
     regions = [
         Polytope.from_box(Box([0, 0, 0.5], R, [0.7, 0.5, 0.4])).erode_by_box(rot_z(0.9), [0.1, 0.2, 0.05]),

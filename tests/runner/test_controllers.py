@@ -72,7 +72,7 @@ def test_errors_and_runaways_are_outcomes_and_the_campaign_goes_on(tmp_path):
 @pytest.mark.parametrize("target, message", [
     ("nowhere", "expected package.module:name or path/to/file.py:name"),
     ("no_such_module_xyz:run", "cannot import no_such_module_xyz"),
-    ("prsc.backends.runner.handover:nothing", "has no 'nothing'"),
+    ("prsc.runner.handover:nothing", "has no 'nothing'"),
     ("missing.py:run", "cannot read missing.py"),
 ])
 def test_a_controller_that_cannot_be_loaded_is_a_clear_error(target, message, tmp_path, capsys):
@@ -143,7 +143,7 @@ def test_prsc_run_with_mujoco_gl_unset(tmp_path):
 def test_the_example_pick_place_controller(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["run", str(REPO / "specs" / "pick_place.prs"), "-n", "3", "-o", str(out),
-                 "--controller", "prsc.backends.runner.pick_place:pick_place"]) == 0
+                 "--controller", "prsc.runner.pick_place:pick_place"]) == 0
     lines = records(out / "results.jsonl")
     assert [r["outcome"] for r in lines] == ["placed"] * 3, lines
     assert all(r["distance_to_target"] < 0.03 for r in lines)
@@ -151,7 +151,7 @@ def test_the_example_pick_place_controller(tmp_path, capsys):
     assert all(label in table for label in ("placed", "unreachable", "dropped", "missed"))
     # A scene the controller cannot drive is refused before anything is compiled.
     assert main(["run", str(CUBES), *INCLUDE, "-o", str(tmp_path / "cubes"),
-                 "--controller", "prsc.backends.runner.pick_place:pick_place"]) == 2
+                 "--controller", "prsc.runner.pick_place:pick_place"]) == 2
     assert "needs one Robot, two Trays and one Cube (found 0 Robot, 0 Tray, 3 Cube)" in capsys.readouterr().err
     assert not (tmp_path / "cubes").exists()
 

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prsc.backends.runner import DEFAULT_CONTROLLER, EpisodeTask, parse_target
-from prsc.backends.runner.handover import OUTCOMES
-from prsc.backends.runner.harness import run_episode as run_task
+from prsc.runner import DEFAULT_CONTROLLER, EpisodeTask, parse_target
+from prsc.runner.handover import OUTCOMES
+from prsc.runner.harness import run_episode as run_task
 from prsc.cli import main
 from tests.original import ORIGINAL, needs_original
 

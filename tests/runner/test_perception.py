@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from prsc.backends.names import with_body_names
-from prsc.backends.runner.handover import HandoverEpisode
-from prsc.backends.runner.harness import fresh_data, load_model
-from prsc.backends.runner.perception import colour_mask, deproject, intrinsics_for, locate_cube
+from prsc.runner.handover import HandoverEpisode
+from prsc.runner.harness import fresh_data, load_model
+from prsc.runner.perception import colour_mask, deproject, intrinsics_for, locate_cube
 
 
 def _settled(scene, mjcf):

@@ -1,4 +1,4 @@
-"""The example pick for any arm with a gripper (backends/runner/pick.py, docs/assets.md):
+"""The example pick for any arm with a gripper (prsc/runner/pick.py, docs/assets.md):
 the gripper is found in the compiled model by forward kinematics, whatever drives it (a
 URDF's finger joints with prsc's servos and a mimic, or the built-in Panda's tendon), and
 each cube, at its own yaw, is lifted 12 cm and put back where it was. A cube wider than
@@ -59,7 +59,7 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "specs" / "pybullet_arm" / "fran
 def test_pick_lifts_every_cube_and_puts_it_back(name, tmp_path):
     """The Franka runs the example spec as its docstring says; the built-in Panda the same scene."""
     spec = EXAMPLE if name == "franka_urdf" else _spec(tmp_path, ARMS[name])
-    done = _prsc("run", str(spec), "-I", str(DATA), "--controller", "prsc.backends.runner.pick:pick",
+    done = _prsc("run", str(spec), "-I", str(DATA), "--controller", "prsc.runner.pick:pick",
                  "-n", str(EPISODES), "-o", str(tmp_path / "run"))
     assert done.returncode == 0, done.stderr
     records = [json.loads(line) for line in (tmp_path / "run" / "results.jsonl").read_text().splitlines()]
@@ -85,9 +85,9 @@ def test_the_gripper_is_found_by_its_kinematics_and_the_cube_is_put_back(tmp_pat
     """The URDF Panda's fingers close at their lower limit (0 m) and open at 0.04 m, along the
     hand's y axis; after the episode (ground truth) both cubes stand where they stood, level.
     Compiled in a fresh build folder: reading the Franka's meshes prints no numpy warnings."""
-    from prsc.backends.runner.arm_scene import SceneArm
-    from prsc.backends.runner.gripper import gripper_of
-    from prsc.backends.runner.pick import pick
+    from prsc.runner.arm_scene import SceneArm
+    from prsc.runner.gripper import gripper_of
+    from prsc.runner.pick import pick
 
     spec = _spec(tmp_path, ARMS["franka_urdf"], tcp=_tcp("franka_urdf"))
     scene, model, data = readback.scene_at_home(_compiled(tmp_path, spec, build=tmp_path / "build"), 0)
@@ -105,7 +105,7 @@ def test_the_gripper_is_found_by_its_kinematics_and_the_cube_is_put_back(tmp_pat
 
 
 def test_a_cube_wider_than_the_open_gripper_is_not_picked(tmp_path):
-    from prsc.backends.runner.pick import pick
+    from prsc.runner.pick import pick
 
     spec = _spec(tmp_path, ARMS["franka_urdf"], "WideCube", _tcp("franka_urdf"))
     scene, model, data = readback.scene_at_home(_compiled(tmp_path, spec), 0)
@@ -114,7 +114,7 @@ def test_a_cube_wider_than_the_open_gripper_is_not_picked(tmp_path):
 
 
 def test_an_arm_without_a_gripper_is_refused_by_name(tmp_path):
-    from prsc.backends.runner.pick import pick
+    from prsc.runner.pick import pick
     from prsc.errors import PrscError
 
     scene, model, data = readback.scene_at_home(_compiled(tmp_path, _spec(tmp_path, 'model: "xarm/xarm6_robot.urdf"')), 0)

@@ -7,8 +7,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from prsc.backends.runner import rendering
-from prsc.backends.runner.harness import fresh_data, load_model
+from prsc.runner import rendering
+from prsc.runner.harness import fresh_data, load_model
 from prsc.cli import main
 
 REPO = Path(__file__).resolve().parents[2]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from prsc.backends.runner.roles import find_roles
+from prsc.runner.roles import find_roles
 from prsc.errors import PrscError
 
 

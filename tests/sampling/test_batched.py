@@ -22,7 +22,7 @@ import pytest
 from scipy.stats import kstest
 
 from prsc.errors import PrscError
-from prsc.geometry.sampler import UniformSampler
+from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.ir import compile_program
 from prsc.sampling import Sampler, compile_sampler
 from prsc.sampling.counter_stream import scene_keys, uniforms

@@ -127,7 +127,7 @@ def test_reachable_by_is_uniform_on_the_table_within_the_ring_less_its_hole(tmp_
     for the law that forgets the hole (drawn the same way), so it can fail."""
     from scipy.stats import ks_2samp
 
-    from prsc.constraints.reach import reach_ring
+    from prsc.constraints.reach_rows import reach_ring
     from prsc.constraints.reach_ring import contains
 
     spec = tmp_path / "reach.prs"

@@ -1,5 +1,5 @@
 """Gibbs sweeps reuse a region prepared earlier in the scene when new rows only translate
-it (prsc/sampling/regions.py, `_Translatable`): a part's region in a bin that moved.
+it (prsc/sampling/prepared_regions.py, `_Translatable`): a part's region in a bin that moved.
 
 - rows whose tight rows move by t, with far workspace rows that stay slack, give the
   prepared region plus t: the same vertices as a fresh preparation, the same measure;
@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-import prsc.sampling.regions as regions
+import prsc.sampling.prepared_regions as regions
 from prsc.geometry.polytope import Polytope
 from prsc.sampling import compile_sampler
 from prsc.sampling.prepared import prepare
-from prsc.sampling.regions import _Translatable
+from prsc.sampling.prepared_regions import _Translatable
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from prsc.syntax import parse_source
-from prsc.syntax.format import format_ast
+from prsc.syntax.ast_text import format_ast
 
 
 def test_nodes_fields_and_spans():

@@ -1,0 +1,51 @@
+"""What crosses process lines in a campaign: episode tasks and results (this module imports no mujoco,
+so a worker can unpickle a task before it chooses its GL backend)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from prsc.runner.controller import ControllerRef
+
+DEFAULT_MAX_SIM_SECONDS = 600.0
+RESERVED_KEYS = ("index", "seed", "sim_seconds", "wall_seconds")
+
+
+@dataclass(frozen=True)
+class EpisodeTask:
+    """One episode to run: its index in the campaign, the scene JSON, its compiled MJCF, the seed
+    to record, the controller and the simulated-time limit."""
+
+    index: int
+    scene: dict
+    mjcf_path: str
+    seed: int
+    controller: ControllerRef
+    max_sim_seconds: float = DEFAULT_MAX_SIM_SECONDS
+
+
+@dataclass(frozen=True)
+class EpisodeResult:
+    """One line of results.jsonl: index, seed, outcome, reason, the controller's own keys, times."""
+
+    index: int
+    seed: int
+    outcome: str
+    reason: str
+    sim_seconds: float
+    wall_seconds: float
+    extra: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        """The JSON object written to results.jsonl (the controller's keys between reason and the times)."""
+        return {"index": self.index, "seed": self.seed, "outcome": self.outcome, "reason": self.reason,
+                **self.extra, "sim_seconds": self.sim_seconds, "wall_seconds": self.wall_seconds}
+
+    @classmethod
+    def from_json(cls, record: dict) -> EpisodeResult:
+        """The result a results.jsonl line holds."""
+        fixed = ("outcome", "reason", *RESERVED_KEYS)
+        return cls(index=int(record["index"]), seed=int(record["seed"]), outcome=str(record["outcome"]),
+                   reason=str(record["reason"]), sim_seconds=float(record["sim_seconds"]),
+                   wall_seconds=float(record["wall_seconds"]),
+                   extra={k: v for k, v in record.items() if k not in fixed})
