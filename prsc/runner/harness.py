@@ -21,6 +21,7 @@ from prsc.backends.names import with_body_names
 
 from prsc.runner.controller import load_controller
 from prsc.runner.faults import InfrastructureError, SimulationTimeLimit
+from prsc.runner.step_hook import raise_from_signal
 from prsc.runner.episode_records import RESERVED_KEYS, EpisodeResult, EpisodeTask
 
 Observer = Callable[[str, mujoco.MjModel, mujoco.MjData], None]
@@ -91,7 +92,7 @@ class _Watchdog:
 
     def _tick(self, signum, frame) -> None:
         if self.data.time > self.limit:
-            raise SimulationTimeLimit()
+            raise_from_signal(SimulationTimeLimit(), frame)  # inside a step hook's ctypes callback too
         if self.every is not None and _observer is not None and self.data.time >= self.next_frame:
             self.next_frame = self.data.time + self.every
             _observer(f"t = {self.data.time:.1f} s", self._model, self.data)

@@ -36,18 +36,47 @@ def test_the_hook_sees_the_episode_at_its_period_while_other_models_compile_and_
     assert heights[0] == 1.0 and all(np.diff(heights) < 0)  # falling, state of that very step
 
 
-def test_an_exception_is_kept_and_ends_the_callbacks_without_breaking_mujoco():
+def test_a_callback_exception_is_raised_by_the_next_step_with_a_clean_state():
     model, data = _episode()
     calls = []
 
     def fails(m, d):
         calls.append(d.time)
-        raise RuntimeError("monitor bug")
+        if len(calls) == 3:
+            raise RuntimeError("monitor bug")
 
     with StepHook(model, data, [PeriodicCallback(0.002, fails)]) as hook:
-        mujoco.mj_step(model, data, nstep=10)
-    assert isinstance(hook.error, RuntimeError) and len(calls) == 1
-    assert data.time == pytest.approx(0.02)
+        with pytest.raises(RuntimeError, match="monitor bug"):
+            mujoco.mj_step(model, data, nstep=10)
+    assert isinstance(hook.error, RuntimeError) and len(calls) == 3
+    clean_model, clean = _episode()
+    mujoco.mj_step(clean_model, clean, nstep=3)  # the raise comes before the 4th step integrates
+    assert data.time == pytest.approx(clean.time) and np.array_equal(data.qpos, clean.qpos)
+
+
+def test_a_signal_handler_that_runs_inside_the_hook_still_ends_the_episode():
+    """SIGALRM's handler often runs inside the ctypes callback, where ctypes drops a raise:
+    raise_from_signal delivers it at the episode's next step instead, every time."""
+    import signal
+
+    from prsc.runner.faults import SimulationTimeLimit
+    from prsc.runner.step_hook import raise_from_signal
+
+    def tick(signum, frame):
+        raise_from_signal(SimulationTimeLimit(), frame)
+
+    previous = signal.signal(signal.SIGALRM, tick)
+    try:
+        for _ in range(5):
+            model, data = _episode()
+            with StepHook(model, data, [PeriodicCallback(0.002, lambda m, d: sum(range(200)))]):
+                signal.setitimer(signal.ITIMER_REAL, 0.005)
+                with pytest.raises(SimulationTimeLimit):
+                    for _ in range(10**6):
+                        mujoco.mj_step(model, data, nstep=5)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 def test_a_previous_control_callback_is_restored_and_periods_must_be_positive():
