@@ -3,7 +3,7 @@ functions and under TYPE_CHECKING: a type named across a layer is a dependency t
 
 - A stage imports only earlier stages: syntax -> ir -> constraints -> sampling -> commands,
   with geometry/ (pure math: numpy, highspy and the standard library) below them all and
-  user_assets/ (the user's URDF, MJCF and mesh files, LANGUAGE.md section 7) just above it.
+  user_assets/ (the user's URDF, MJCF and mesh files) just above it.
 - The parser (syntax/) knows no semantics: lark, the standard library and prsc.errors.
 - Backends (and the asset recipes they read) never import spec text's stages, the IR or
   prsc.commands: they read scene JSON and asset descriptions.
