@@ -6,6 +6,7 @@
   a copy of that file in the site (`repo/...`); a link to a folder becomes its name in code;
   one to nothing is a warning, so the strict build fails;
 - cli.md's `<!-- cli-help -->` becomes every command's `--help`, from prsc/cli.py's parsers;
+- `\\|` in a table cell's code (GitHub's escape) is shown as `|`;
 - every name in `prsc.__all__` must have a `::: identifier` entry in docs/api/*.md, and
   everything those entries document must have a docstring, or the build fails.
 """
@@ -117,8 +118,8 @@ def _rewrite_links(markdown: str, src_uri: str) -> str:
 
 
 def _help_texts() -> str:
-    """Every command's --help, as the terminal shows it at 88 columns."""
-    os.environ["COLUMNS"] = "88"  # argparse wraps to the terminal's width
+    """Every command's --help, as an 80-column terminal shows it."""
+    os.environ["COLUMNS"] = "80"  # argparse wraps to the terminal's width
     from prsc import cli
 
     parser = cli.build_parser()
@@ -139,7 +140,15 @@ def on_page_markdown(markdown: str, page: Any, config: Any, files: Files) -> str
         if CLI_MARKER not in markdown:
             raise PluginError(f"docs/cli.md lost its {CLI_MARKER} marker")
         markdown = markdown.replace(CLI_MARKER, _help_texts())
-    return _rewrite_links(markdown, src_uri)
+    return _rewrite_links(_unescape_table_code(markdown), src_uri)
+
+
+def _unescape_table_code(markdown: str) -> str:
+    """`a\\|b` in a table cell's code: GitHub needs the backslash, Python-Markdown shows it."""
+    def unescape(line: str) -> str:
+        return re.sub(r"`[^`]*`", lambda m: m.group(0).replace("\\|", "|"), line) if line.startswith("|") else line
+
+    return "\n".join(unescape(line) for line in markdown.split("\n"))
 
 
 def _resolve_identifier(identifier: str) -> Any:
