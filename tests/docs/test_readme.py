@@ -53,7 +53,8 @@ def test_the_readme_is_a_front_page():
     lines = README.splitlines()
     assert len(lines) <= 150
     opening = "\n".join(lines[:40])
-    assert "make demo" in opening and "make test" in opening and "```prs" in opening
+    (spec,) = [text for text, _ in _blocks("prs")]
+    assert "make demo" in opening and "make test" in opening and f"```prs\n{spec}```" in opening
     assert "docs/img/table_cube_sheet.png" in opening
     assert {lang for lang, _, _ in BLOCKS} <= KINDS, "a block of a kind this test does not run"
 
