@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: setup test demo datasets bench casestudy casestudy-check clean
+.PHONY: setup test demo docs datasets bench casestudy casestudy-check clean
 
 setup: $(STAMP)
 
@@ -21,6 +21,18 @@ $(STAMP): pyproject.toml
 
 test: $(STAMP)
 	$(PY) -m pytest -q -n 2 --dist loadfile
+
+# The documentation site (mkdocs.yml) into site/: the [docs] extra goes into .venv beside
+# what setup installs (not part of `make test`'s install). --strict: a warning fails the build
+# (a broken link or anchor, a page missing from the nav, a public name of prsc without an API
+# entry or a docstring: docs/hooks.py).
+DOCS_STAMP := $(VENV)/.docs-installed
+$(DOCS_STAMP): $(STAMP) pyproject.toml
+	$(PY) -m pip install -q --no-compile -e '.[docs]'
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict
 
 # The Table-Cube spec -> 8 MuJoCo scenes: check it, compile it, load and step scene 0,
 # and draw a contact sheet of all 8 (out/demo/table_cube_sheet.png). --force: a demo folder
@@ -63,7 +75,7 @@ casestudy-check: casestudy
 	$(PY) -c "import json, sys; f = lambda p: [{k: v for k, v in json.loads(l).items() if k != 'wall_seconds'} for l in open(p)]; same = f('out/casestudy/results.jsonl') == f('out/casestudy-rerun/results.jsonl'); print('casestudy reproduced exactly' if same else 'casestudy NOT reproduced'); sys.exit(0 if same else 1)"
 
 clean:
-	rm -rf build out .pytest_cache
+	rm -rf build out site .pytest_cache
 
 # `reachable by`: regenerate the Panda's top-down reachable set from its IK (~11 min on 2 cores), measure
 # what it keeps of the true reach and of a tray, check its edge; then the 200-episode demonstration (docs/sampling.md).

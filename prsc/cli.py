@@ -16,6 +16,19 @@ from prsc.errors import PrscError, format_error
 # Each module in prsc.commands exposes `add_parser(subparsers)` and `run(args) -> int`.
 # Imported lazily so `prsc check` does not pay for mujoco, pxr or pybullet.
 COMMANDS = ("check", "explain", "sample", "compile", "run", "falsify", "bench", "preview", "reach")
+# The last line of each command's --help: a command to run from a clone (reach: the arm pybullet ships,
+# PYBULLET_DATA being pybullet_data.getDataPath()). tests/cli/test_help_examples.py parses each.
+EXAMPLES = {
+    "check": "prsc check specs/table_cube.prs",
+    "explain": "prsc explain specs/table_cube.prs --stage constraints",
+    "sample": "prsc sample specs/table_cube.prs -n 10 --seed 0 -o scenes.jsonl",
+    "compile": "prsc compile specs/table_cube.prs --target mjcf,usd -n 100 -o out",
+    "run": "prsc run specs/table_cube.prs -n 20 --seed 0 --jobs 2 -o out/run",
+    "falsify": "prsc falsify specs/table_cube.prs --budget 200 -o out/falsify",
+    "bench": "prsc bench specs/table_cube.prs specs/table_cube_naive.prs",
+    "preview": "prsc preview specs/table_cube.prs -n 8 -o sheet.png",
+    "reach": "prsc reach xarm/xarm6_robot.urdf -I \"$PYBULLET_DATA\" --plot r.png",
+}
 DESCRIPTION = (
     "prsc: a compiler for probabilistic 3D scene specifications (.prs). It samples scenes that "
     "satisfy a spec's constraints exactly and writes them for simulators (MJCF, URDF, SDF, USD). "
@@ -41,6 +54,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
             continue
         module = importlib.import_module(f"prsc.commands.{name}")
         module.add_parser(sub)
+        if name in EXAMPLES:
+            sub.choices[name].epilog = f"example: {EXAMPLES[name]}"
     return parser
 
 

@@ -12,7 +12,8 @@ def test_docs_and_sources_point_only_inside_the_repository():
     # The folder this checkout sits in, read at run time: a path under it written into a file
     # is a path of the machine that wrote it.
     outside = ("LANGUAGE.md", "shared folder", "../shared", "shared/specs", "FIELD-NOTES", f"{REPO.parent}/")
-    files = [REPO / "README.md", REPO / "Makefile", *(REPO / "docs").glob("*.md"), *(REPO / "specs").rglob("*.prs"),
+    files = [REPO / "README.md", REPO / "CHANGELOG.md", REPO / "Makefile", REPO / "mkdocs.yml",
+             *(REPO / "docs").rglob("*.md"), *(REPO / "docs").rglob("*.py"), *(REPO / "specs").rglob("*.prs"),
              *(REPO / "specs").rglob("*.py"), *(p for d in ("prsc", "backends", "assets") for p in (REPO / d).rglob("*.py"))]
     found = [f"{path.relative_to(REPO)}: {word}" for path in files for word in outside if word in path.read_text()]
     assert found == []
