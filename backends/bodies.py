@@ -168,13 +168,18 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     return Body(obj, parts, composite_inertial(parts, obj.mass), None, obj.camera)
 
 
-def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
-    """`with texture`: the image on the object's visible boxes, cylinders and spheres."""
+def texture_image(obj: SceneObject, scene: Scene, store: AssetStore) -> str:
+    """The store's copy of the image an object's `texture` names (absolute path)."""
     source = resolve_mesh_source(obj, scene, store, "texture")
     try:
-        image = str(store.texture_image(source))
+        return str(store.texture_image(source))
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
+
+
+def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
+    """`with texture`: the image on the object's visible boxes, cylinders and spheres."""
+    image = texture_image(obj, scene, store)
     return tuple(replace(p, texture=image) if p.shape in TEXTURED_SHAPES and p.visible else p for p in parts)
 
 

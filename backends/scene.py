@@ -177,6 +177,11 @@ def _object(raw: Any, k: int) -> dict[str, Any]:
     )
 
 
+def parse_object(raw: Any, k: int, element: str) -> SceneObject:
+    """Object `k` of a scene JSON, validated, whose element name is known (a shared model's reset)."""
+    return SceneObject(name=element, **_object(raw, k))
+
+
 def parse_scene(raw: Mapping[str, Any]) -> Scene:
     """Validate a scene JSON dict and return it as a typed Scene (PrscError if malformed)."""
     if not isinstance(raw, Mapping) or raw.get("format") != "prsc-scene":

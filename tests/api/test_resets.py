@@ -31,7 +31,7 @@ REPO = Path(__file__).resolve().parents[2]
 SCENES = 10  # equality is checked to 1e-9 per scene; 10 scenes cover every object and part size change
 DECIDED = ("body_pos", "body_quat", "body_mass", "body_ipos", "body_iquat", "body_inertia", "body_subtreemass",
            "body_invweight0", "dof_invweight0", "geom_size", "geom_pos", "geom_quat", "geom_rbound", "geom_aabb",
-           "geom_rgba", "cam_fovy", "qpos0", "key_qpos", "key_ctrl")
+           "geom_rgba", "cam_fovy", "qpos0", "qpos_spring", "key_qpos", "key_ctrl")
 
 
 @pytest.mark.parametrize("spec", ["table_cube", "bin_picking"])
@@ -51,6 +51,8 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
         mujoco.mj_forward(fresh, fresh_data)
         for name in DECIDED:
             worst[name] = max(worst[name], float(np.max(np.abs(getattr(model, name) - getattr(fresh, name)), initial=0)))
+        worst["stat"] = max(worst.get("stat", 0.0), float(np.max(np.abs(model.stat.center - fresh.stat.center))),
+                            abs(model.stat.extent - fresh.stat.extent))
         worst["xpos"] = max(worst["xpos"], float(np.max(np.abs(data.xpos - fresh_data.xpos))))
         worst["xquat"] = max(worst["xquat"], float(np.max(np.abs(data.xquat - fresh_data.xquat))))
         sizes.add(model.geom_size.tobytes())
@@ -86,29 +88,93 @@ def test_a_mesh_whose_size_changes_is_refused():
             scenario.apply(scenario.scene(0, index), model, data)
 
 
-def test_a_texture_that_changes_is_refused_and_a_kept_one_shows_white(tmp_path):
+def _textured_table_cube(folder: Path) -> Path:
+    """Table-Cube whose cube shows one of three images per scene."""
     from PIL import Image
 
-    for name, colour in (("red.png", (200, 0, 0)), ("green.png", (0, 200, 0))):
-        Image.fromarray(np.full((8, 8, 3), colour, np.uint8)).save(tmp_path / name)
-    (tmp_path / "crates.prs").write_text(
-        'from tabletop import *\nt = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75\n'
-        'crate = Cube completely on t, with texture Options(["red.png", "green.png"])\n')
-    scenario = prsc.load(tmp_path / "crates.prs")
-    model = scenario.model(0, 0)
+    rng = np.random.default_rng(0)
+    for name in ("wood", "marble", "checker"):
+        Image.fromarray(rng.integers(0, 255, (16, 16, 3), dtype=np.uint8)).save(folder / f"{name}.png")
+    text = (REPO / "specs" / "table_cube.prs").read_text().replace(
+        'c1 = Cube completely on tr_1, with color "red"',
+        'c1 = Cube completely on tr_1, with texture Options(["wood.png", "marble.png", "checker.png"])')
+    assert "with texture" in text
+    (folder / "textured.prs").write_text(text)
+    return folder / "textured.prs"
+
+
+def _image_of(model, geom: int) -> bytes:
+    """The pixels of the RGB texture a geom's material shows."""
+    texture = model.mat_texid[model.geom_matid[geom], int(mujoco.mjtTextureRole.mjTEXROLE_RGB)]
+    size = model.tex_width[texture] * model.tex_height[texture] * model.tex_nchannel[texture]
+    return model.tex_data[model.tex_adr[texture]:model.tex_adr[texture] + size].tobytes()
+
+
+def _close_up(renderer, model, data, body: str) -> np.ndarray:
+    """An image of a body filling the view (MuJoCo's free camera aimed at it)."""
+    camera = mujoco.MjvCamera()
+    camera.lookat[:] = data.body(body).xpos
+    camera.distance, camera.azimuth, camera.elevation = 0.12, 60.0, -35.0
+    renderer.update_scene(data, camera)
+    return renderer.render().copy()
+
+
+def test_every_image_is_loaded_once_and_apply_shows_the_scenes(tmp_path):
+    # 30 scenes: the image each geom shows equals a fresh model's; two scenes of each image also render equal.
+    scenario = prsc.load(_textured_table_cube(tmp_path))
+    model = scenario.model()
     data = mujoco.MjData(model)
-    texture = lambda scene: next(o for o in scene["objects"] if o["name"] == "crate")["properties"]["texture"]
-    scenes = [scenario.scene(0, index) for index in range(12)]  # the model's own scene first
-    first = texture(scenes[0])
-    same = [s for s in scenes if texture(s) == first]
-    other = [s for s in scenes if texture(s) != first]
-    assert len(same) >= 2 and other  # both images are drawn in 12 scenes
-    for scene in same:
+    geom = model.geom("c1/box").id
+    shown: dict[str, list[bytes]] = {}
+    for index in range(1, 31):
+        scene = scenario.scene(0, index)
         scenario.apply(scene, model, data)
         fresh = prsc.mujoco_model(scene)
-        assert np.array_equal(model.geom_rgba, fresh.geom_rgba)  # the textured box is white, as compiled
-    with pytest.raises(PrscError, match=f"object 'crate' shows another image .*{texture(other[0])[:-4]}"):
-        scenario.apply(other[0], model, data)
+        assert _image_of(model, geom) == _image_of(fresh, fresh.geom("c1/box").id)
+        image = next(o for o in scene["objects"] if o["name"] == "c1")["properties"]["texture"]
+        if len(shown.setdefault(image, [])) == 2:
+            continue
+        fresh_data = mujoco.MjData(fresh)
+        mujoco.mj_resetDataKeyframe(fresh, fresh_data, fresh.key("home").id)
+        mujoco.mj_forward(fresh, fresh_data)
+        with mujoco.Renderer(fresh, 48, 64) as renderer:
+            expected = _close_up(renderer, fresh, fresh_data, "c1")
+        with mujoco.Renderer(model, 48, 64) as renderer:
+            seen = _close_up(renderer, model, data, "c1")
+        assert np.array_equal(seen, expected)
+        shown[image].append(seen.tobytes())
+    assert sorted(shown) == ["checker.png", "marble.png", "wood.png"]
+    assert len({views[0] for views in shown.values()}) == 3  # each image looks different
+
+
+def test_an_image_the_model_did_not_load_is_refused(tmp_path):
+    scenario = prsc.load(_textured_table_cube(tmp_path))
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    scene = copy.deepcopy(scenario.scene(0, 1))
+    from PIL import Image
+
+    Image.fromarray(np.zeros((4, 4, 3), np.uint8)).save(tmp_path / "other.png")
+    next(o for o in scene["objects"] if o["name"] == "c1")["properties"]["texture"] = "other.png"
+    with pytest.raises(PrscError, match="object 'c1' shows an image \\(other-.*\\) that is not among"):
+        scenario.apply(scene, model, data)
+
+
+def test_another_ground_or_camera_resolution_is_refused():
+    scenario = prsc.load(REPO / "specs" / "table_cube.prs")
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    scene = scenario.scene(0, 1)
+    bare = copy.deepcopy(scene)
+    bare["params"]["ground"] = False
+    with pytest.raises(PrscError, match="it has no ground plane, the model has"):
+        scenario.apply(bare, model, data)
+    wide = copy.deepcopy(scene)
+    next(o for o in wide["objects"] if o["name"] == "camera")["camera"]["resolution"] = [320, 240]
+    with pytest.raises(PrscError, match=r"camera 'camera' has the resolution \(320, 240\) here, \(640, 480\)"):
+        scenario.apply(wide, model, data)
+    scenario.apply(scene, model, data)  # then the scene the model holds, as before
+    assert np.allclose(data.body("c1").xpos, next(o for o in scene["objects"] if o["name"] == "c1")["position"])
 
 
 gymnasium = pytest.importorskip("gymnasium")
