@@ -229,3 +229,61 @@ def test_bench_resets_prints_each_way(capsys):
     out = capsys.readouterr().out
     for row in ("apply (scene drawn)", "compile (scene drawn)", "draw + apply", "SyncVectorEnv x4 reset"):
         assert row in out
+
+
+def test_camera_observations_are_the_spec_cameras_images():
+    from gymnasium.utils.env_checker import check_env
+
+    spec = REPO / "specs" / "table_cube.prs"
+    env = prsc.SceneEnv(spec, observation={"camera": ("rgb", "depth", "segmentation")})
+    assert set(env.observation_space["camera"].spaces) == {"rgb", "depth", "segmentation"}
+    assert env.observation_space["camera"]["rgb"].shape == (480, 640, 3)
+    for seed in (3, 4):  # one renderer for both scenes: the second is drawn after a reset
+        observation, info = env.reset(seed=seed)
+        fresh = prsc.mujoco_model(info["scene"])
+        fresh_data = mujoco.MjData(fresh)
+        mujoco.mj_resetDataKeyframe(fresh, fresh_data, fresh.key("home").id)
+        mujoco.mj_forward(fresh, fresh_data)
+        with mujoco.Renderer(fresh, 480, 640) as renderer:
+            renderer.update_scene(fresh_data, "camera")
+            expected = renderer.render()
+        assert observation["camera"]["rgb"].std() > 1.0
+        assert np.array_equal(observation["camera"]["rgb"], expected)
+        assert env.observation_space.contains(observation)
+    env.close()
+    env = prsc.SceneEnv(spec, observation="cameras", render_mode="rgb_array", render_camera="camera", width=64, height=48)
+    check_env(env, skip_render_check=False)
+    assert env.render().shape == (48, 64, 3)
+    env.close()
+    with pytest.raises(ValueError, match="no camera 'ceiling' in this spec"):
+        prsc.SceneEnv(spec, observation={"ceiling": "rgb"})
+
+
+def test_steps_give_no_scene_and_truncate_at_max_episode_steps():
+    env = prsc.SceneEnv(REPO / "specs" / "table_cube.prs", max_episode_steps=3)
+    _, info = env.reset(seed=0)
+    assert info["scene"]["index"] == 0
+    outcomes = [env.step(env.action_space.sample()) for _ in range(3)]
+    assert [truncated for *_, truncated, _ in outcomes] == [False, False, True]
+    assert all(info == {} for *_, info in outcomes)
+    env.reset()
+    assert not env.step(env.action_space.sample())[3]  # the count starts again
+
+
+def test_a_urdf_arm_s_actions_are_bounded_by_its_joint_limits():
+    import pybullet_data
+
+    env = prsc.SceneEnv(REPO / "specs" / "pybullet_arm" / "franka_pick.prs", include_dirs=[pybullet_data.getDataPath()])
+    model = env.model
+    joints = model.actuator_trnid[:, 0]
+    assert model.nu == 9 and np.all(np.isfinite(env.action_space.low)) and np.all(np.isfinite(env.action_space.high))
+    assert np.allclose(env.action_space.low, model.jnt_range[joints, 0], atol=1e-6)
+    assert np.allclose(env.action_space.high, model.jnt_range[joints, 1], atol=1e-6)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    for _ in range(50):
+        env.step(env.action_space.sample())
+        targets = env.data.ctrl
+        assert np.all(targets >= model.jnt_range[joints, 0]) and np.all(targets <= model.jnt_range[joints, 1])
+    env.step(np.full(model.nu, 100.0))  # beyond the space: clipped to it
+    assert np.array_equal(env.data.ctrl, model.jnt_range[joints, 1])
