@@ -32,7 +32,7 @@ from pathlib import Path
 from prsc.user_assets.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
-from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
+from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, light_directions, resolve_bodies
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
 from prsc.backends.scene_structure import scene_structure, template_key
@@ -175,6 +175,16 @@ def geom_rgba(obj, part) -> tuple[float, ...]:
     return TEXTURED_RGBA if part.texture is not None else tuple(obj.color)
 
 
+def light_attributes(body: Body) -> dict[str, str]:
+    """A light object's MJCF `light` attributes that change from scene to scene, as text: a light of
+    the world body where the object is, shining along the object's +y."""
+    light = body.light
+    assert light is not None
+    return {"pos": nums(body.obj.position), "dir": nums(light_directions(body.obj.quaternion)[0]),
+            "diffuse": nums(light.diffuse), "cutoff": num(light.cutoff),
+            "castshadow": "true" if light.cast_shadow else "false"}
+
+
 def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dict[str, str]]:
     """Every number (and file path) of the scene's own elements that changes from scene to
     scene, exactly, by (tag, element name) and attribute: the text that fills a template's
@@ -182,6 +192,9 @@ def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dic
     exact: dict[tuple[str, str], dict[str, str]] = {}
     for body in bodies:
         obj, inertial = body.obj, body.inertial
+        if body.light is not None:
+            exact[("light", obj.name)] = light_attributes(body)
+            continue
         exact[("body", obj.name)] = {"pos": nums(obj.position), "quat": nums(obj.quaternion)}
         exact[("inertial", obj.name)] = {
             "pos": nums(inertial.com), "quat": nums(inertial.principal),
@@ -235,6 +248,14 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
         )
     for body in bodies:
         obj = body.obj
+        if body.light is not None:
+            kind = {"directional": mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, "spot": mujoco.mjtLightType.mjLIGHT_SPOT}
+            spec.worldbody.add_light(
+                name=obj.name, type=kind[body.light.kind], pos=list(obj.position),
+                dir=list(light_directions(obj.quaternion)[0]), diffuse=list(body.light.diffuse),
+                specular=[0.1, 0.1, 0.1], cutoff=body.light.cutoff, castshadow=body.light.cast_shadow,
+            )
+            continue
         b = spec.worldbody.add_body(name=obj.name, pos=list(obj.position), quat=list(obj.quaternion))
         if not body.fixed:
             b.add_freejoint(name=obj.name)
@@ -301,7 +322,7 @@ def _stamp(root: ET.Element, exact: dict[tuple[str, str], dict[str, str]], slots
             element.set(attr, _slot(len(slots)))
             slots.append(("exact", key, attr))
 
-    for tag in ("mesh", "texture"):
+    for tag in ("mesh", "texture", "light"):
         for element in root.iter(tag):
             if (tag, element.get("name", "")) in exact:
                 mark(element, (tag, element.get("name", "")))

@@ -1,7 +1,7 @@
 """A scene's structure: everything of its MuJoCo model that is not a number written per scene.
 
 Two scenes with equal structures compile to models with the same bodies, joints, geoms,
-cameras, actuators and array sizes. The MJCF writer (backends/mjcf.py) keeps one
+cameras, lights, actuators and array sizes. The MJCF writer (backends/mjcf.py) keeps one
 template per structure; the shared model of `scenario.model()` (backends/shared_model.py)
 holds every scene whose structure equals its own, and refuses the others, saying why
 (`difference`). This module is the one place that decides what "structure" means.
@@ -39,6 +39,7 @@ class ObjectStructure:
     camera_resolution: tuple[int, int] | None  # (width, height): compiled into the model
     parts: tuple[PartStructure, ...]
     robot_joints: tuple[str, ...]  # the joints the scene sets on a robot (sorted)
+    light: str | None  # a light's kind ("directional" | "spot"): a light of the world body, not a body
 
 
 @dataclass(frozen=True)
@@ -62,6 +63,7 @@ def scene_structure(scene: Scene, bodies: tuple[Body, ...]) -> SceneStructure:
             camera_resolution=None if b.camera is None else (b.camera.width, b.camera.height),
             parts=tuple(_part(p) for p in b.parts),
             robot_joints=tuple(sorted(b.obj.joints)) if b.robot is not None else (),
+            light=None if b.light is None else b.light.kind,
         )
         for b in bodies))
 
@@ -82,6 +84,8 @@ def _object_difference(old: ObjectStructure, new: ObjectStructure) -> str:
     if old.camera_resolution != new.camera_resolution:
         return (f"camera {name!r} has the resolution {new.camera_resolution} here, {old.camera_resolution} in the "
                 "model (a camera's resolution is compiled into the model)")
+    if old.light != new.light:
+        return f"object {name!r} is a {new.light or 'body, not a'} light here, a {old.light or 'body, not a'} light in the model"
     shapes_old = [(p.name, p.shape) for p in old.parts]
     shapes_new = [(p.name, p.shape) for p in new.parts]
     if shapes_old != shapes_new:

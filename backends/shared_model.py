@@ -34,7 +34,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from prsc.backends.bodies import Body, resolve_body, resolve_bodies, texture_image
+from prsc.backends.bodies import Body, light_directions, resolve_body, resolve_bodies, texture_image
 from prsc.backends.mjcf import RobotFragment, geom_rgba, geom_size, robot_fragment
 from prsc.backends.scene import Scene, parse_object, parse_scene, scene_position, unit_quaternion
 from prsc.backends.scene_structure import SceneStructure, difference, scene_structure
@@ -147,7 +147,10 @@ class SharedModel:
         self._materials: dict[tuple[int, Any], int] = {}  # (object index, image name) -> material id
         self._textured_geoms = [np.array([model.geom(f"{b.name}/{p.name}").id for p in b.parts
                                           if p.texture is not None and p.shape != "mesh"], dtype=int) for b in bodies]
-        self._body_ids = np.array([model.body(b.name).id for b in bodies], dtype=int)
+        # Objects are bodies or lights (a light of the world body, where the object is).
+        self._is_light = np.array([b.light is not None for b in bodies], dtype=bool)
+        self._body_ids = np.array([model.body(b.name).id for b in bodies if b.light is None], dtype=int)
+        self._light_ids = np.array([model.light(b.name).id for b in bodies if b.light is not None], dtype=int)
         self._free = np.array([not b.fixed for b in bodies], dtype=bool)
         # Each free body's 7 qpos entries (position, quaternion), in scene order.
         self._free_qpos = np.array([model.jnt_qposadr[model.joint(b.name).id] + k
@@ -169,8 +172,11 @@ class SharedModel:
         poses = np.array([scene_position(raw.get("position"), f"scene JSON: object {body.name!r}.position")
                           + unit_quaternion(raw.get("quaternion"), f"scene JSON: object {body.name!r}.quaternion")
                           for body, raw in zip(self._bodies, scene_json["objects"])], dtype=float).reshape(-1, 7)
-        model.body_pos[self._body_ids] = poses[:, :3]
-        model.body_quat[self._body_ids] = poses[:, 3:]
+        model.body_pos[self._body_ids] = poses[~self._is_light, :3]
+        model.body_quat[self._body_ids] = poses[~self._is_light, 3:]
+        if len(self._light_ids):
+            model.light_pos[self._light_ids] = poses[self._is_light, :3]
+            model.light_dir[self._light_ids] = light_directions(poses[self._is_light, 3:])
         free = poses[self._free]
         model.qpos0[self._free_qpos] = free.ravel()
         model.qpos_spring[self._free_qpos] = free.ravel()  # the compiler's copy of qpos0 for free joints
@@ -278,7 +284,15 @@ class SharedModel:
         """Mass properties, geoms, colours, images and camera of object `k` (its pose: `apply`)."""
         model = self.model
         obj = body.obj
-        b = self._body_ids[k]
+        self._image_names[k] = _image_name(raw)
+        self._signatures[k] = _signature(raw)
+        if body.light is not None:
+            light = model.light(obj.name).id
+            model.light_diffuse[light] = body.light.diffuse
+            model.light_cutoff[light] = body.light.cutoff
+            model.light_castshadow[light] = body.light.cast_shadow
+            return
+        b = model.body(obj.name).id
         inertial = body.inertial
         model.body_mass[b] = inertial.mass
         model.body_ipos[b] = inertial.com
@@ -302,8 +316,6 @@ class SharedModel:
         if any(p.texture is not None and p.shape != "mesh" for p in body.parts):
             self._materials[(k, _image_name(raw))] = self._material(obj.label, next(
                 p.texture for p in body.parts if p.texture is not None and p.shape != "mesh"))
-        self._image_names[k] = _image_name(raw)
-        self._signatures[k] = _signature(raw)
         if body.camera is not None:
             model.cam_fovy[model.camera(obj.name).id] = body.camera.fovy
 
