@@ -147,7 +147,7 @@ class SceneEnv(gymnasium.Env):
         """Set the controls (clipped to the action space) and step MuJoCo `frame_skip` times."""
         import mujoco
 
-        np.clip(action, self._low, self._high, out=self.data.ctrl)
+        np.minimum(np.maximum(action, self._low), self._high, out=self.data.ctrl)  # np.clip costs twice as much
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
         self._steps += 1
         reward = float(self._reward(self.scene, self.model, self.data)) if self._reward else 0.0

@@ -14,6 +14,7 @@ recompiling (`scenario.apply`), and `prsc.SceneEnv`, a Gymnasium environment on 
 from __future__ import annotations
 
 import copy
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -288,3 +289,13 @@ def test_a_urdf_arm_s_actions_are_bounded_by_its_joint_limits():
         assert np.all(targets >= model.jnt_range[joints, 0]) and np.all(targets <= model.jnt_range[joints, 1])
     env.step(np.full(model.nu, 100.0))  # beyond the space: clipped to it
     assert np.array_equal(env.data.ctrl, model.jnt_range[joints, 1])
+
+
+def test_the_domain_randomisation_example_runs_as_written(tmp_path):
+    # A fresh shell: no MUJOCO_GL, so SceneEnv picks a headless backend itself.
+    shell = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    done = subprocess.run([sys.executable, str(REPO / "examples" / "domain_randomisation.py"), "--episodes", "4",
+                           "--steps", "2"], capture_output=True, text=True, cwd=tmp_path, timeout=300, env=shell)
+    assert done.returncode == 0, done.stderr
+    assert "4 distinct first images of 4 episodes" in done.stdout
+    assert (tmp_path / "domain_randomisation.png").is_file()
