@@ -30,7 +30,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -43,8 +44,13 @@ from prsc.errors import PrscError
 
 
 def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
-    """An object of scene JSON without its pose: what decides its sizes, masses and joints."""
-    return {k: v for k, v in raw.items() if k not in ("position", "quaternion")}
+    """An object of scene JSON without its pose and image: what decides its sizes, masses and joints."""
+    signature = dict(raw)
+    del signature["position"], signature["quaternion"]
+    properties = raw.get("properties")
+    if isinstance(properties, Mapping) and "texture" in properties:
+        signature["properties"] = {k: v for k, v in properties.items() if k != "texture"}
+    return signature
 
 
 def _bounds(shape: str, size: tuple[float, ...]) -> tuple[float, np.ndarray]:
@@ -57,16 +63,6 @@ def _bounds(shape: str, size: tuple[float, ...]) -> tuple[float, np.ndarray]:
         return float(np.hypot(radius, half_height)), np.array([radius, radius, half_height])
     radius = size[0]
     return float(radius), np.array([radius, radius, radius])
-
-
-
-def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
-    """An object of scene JSON without its pose and image: what decides its sizes, masses and joints."""
-    signature = {k: v for k, v in raw.items() if k not in ("position", "quaternion", "properties")}
-    properties = raw.get("properties")
-    if isinstance(properties, Mapping):
-        signature["properties"] = {k: v for k, v in properties.items() if k != "texture"}
-    return signature
 
 
 def _image_name(raw: Mapping[str, Any]) -> Any:
@@ -93,25 +89,33 @@ def _images(scene: Scene, bodies: tuple[Body, ...], store: AssetStore,
     return tuple(paths)
 
 
-def _set_statistics(model, data) -> None:
+class _Statistics:
     """`model.stat.center` and `extent` as MuJoCo's compiler sets them at `qpos0`: the box round the
     bodies, their centres of mass, joint anchors, sites and geoms' bounding spheres (a plane's:
     a tenth of its size, 0.01 when infinite, as measured on MuJoCo 4.0). Cameras and the free
     camera scale their clip planes by `extent`, so an image depends on them."""
-    import mujoco
 
-    data.qpos[:] = model.qpos0
-    mujoco.mj_kinematics(model, data)
-    radius = model.geom_rbound.copy()
-    planes = (radius == 0) & (model.geom_type == int(mujoco.mjtGeom.mjGEOM_PLANE))
-    finite = np.max(model.geom_size[:, :2], axis=1)
-    radius[planes] = np.where(finite[planes] > 0, 0.1 * finite[planes], 0.01)
-    counted = radius > 0
-    points = [data.xpos[1:], data.xipos[1:], data.xanchor, data.site_xpos]
-    low = np.min(np.concatenate(points + [data.geom_xpos[counted] - radius[counted, None]]), axis=0)
-    high = np.max(np.concatenate(points + [data.geom_xpos[counted] + radius[counted, None]]), axis=0)
-    model.stat.center[:] = (low + high) / 2
-    model.stat.extent = max(float(np.max(high - low)), 1e-5, 2 * model.stat.meansize)
+    def __init__(self, model) -> None:
+        import mujoco
+
+        planes = (model.geom_rbound == 0) & (model.geom_type == int(mujoco.mjtGeom.mjGEOM_PLANE))
+        finite = np.max(model.geom_size[:, :2], axis=1)
+        plane_radius = np.where(finite > 0, 0.1 * finite, 0.01)
+        # Which geoms count is structure (a sized primitive or a mesh has a radius; a plane its own).
+        self.geoms = np.flatnonzero((model.geom_rbound > 0) | planes)
+        self.planes = np.flatnonzero(planes[self.geoms])
+        self.plane_radius = plane_radius[planes]
+
+    def set(self, model, data) -> None:
+        """Set them from `data`'s kinematics at `qpos0`."""
+        radius = model.geom_rbound[self.geoms]
+        radius[self.planes] = self.plane_radius
+        centres = data.geom_xpos[self.geoms]
+        points = np.concatenate((data.xpos[1:], data.xipos[1:], data.xanchor, data.site_xpos,
+                                 centres - radius[:, None], centres + radius[:, None]))
+        low, high = points.min(axis=0), points.max(axis=0)
+        model.stat.center[:] = (low + high) / 2
+        model.stat.extent = max(float(np.max(high - low)), 1e-5, 2 * model.stat.meansize)
 
 
 class SharedModel:
@@ -156,6 +160,11 @@ class SharedModel:
         self._free_qpos = np.array([model.jnt_qposadr[model.joint(b.name).id] + k
                                     for b in bodies if not b.fixed for k in range(7)], dtype=int)
         self._home = model.key("home").id if model.nkey else None
+        # mj_setConst leaves `data` at `qpos_spring`, where the statistics are taken when it is `qpos0`.
+        fixed = np.ones(model.nq, dtype=bool)
+        fixed[self._free_qpos] = False
+        self._spring_at_qpos0 = bool(np.array_equal(model.qpos_spring[fixed], model.qpos0[fixed]))
+        self._statistics = _Statistics(model)
         self._robot_qpos = np.zeros(model.nq)
         self._robot_ctrl = np.zeros(model.nu)
 
@@ -189,7 +198,10 @@ class SharedModel:
             if model.nu:
                 model.key_ctrl[home] = self._robot_ctrl
         mujoco.mj_setConst(model, data)
-        _set_statistics(model, data)
+        if not self._spring_at_qpos0:  # mj_setConst leaves `data` at `qpos_spring`
+            data.qpos[:] = model.qpos0
+            mujoco.mj_kinematics(model, data)
+        self._statistics.set(model, data)
         if home is not None:
             mujoco.mj_resetDataKeyframe(model, data, home)
         else:
