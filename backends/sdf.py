@@ -271,7 +271,8 @@ def _light(world: ET.Element, body: Body) -> None:
     element = ET.SubElement(world, "light", name=body.obj.name, type=light.kind)
     ET.SubElement(element, "cast_shadows").text = "true" if light.cast_shadow else "false"
     _pose(element, body.obj.position, (1.0, 0.0, 0.0, 0.0))
-    ET.SubElement(element, "diffuse").text = nums((*light.diffuse, 1.0))
+    ET.SubElement(element, "diffuse").text = nums((*light.color, 1.0))  # a colour: each component in [0, 1]
+    ET.SubElement(element, "intensity").text = num(light.intensity)  # SDF 1.9
     ET.SubElement(element, "specular").text = "0.1 0.1 0.1 1"
     ET.SubElement(element, "direction").text = nums(light_directions(body.obj.quaternion)[0])
     if light.kind == "spot":

@@ -4,7 +4,7 @@ and set by `scenario.apply` per scene as a freshly compiled model has it.
 - 10 scenes through `apply`: `light_pos`, `light_dir`, `light_diffuse`, `light_cutoff` (and what
   mj_setConst derives) equal a fresh model's, and they change from scene to scene;
 - MuJoCo loads the MJCF file with the light; pxr's validators report 0 errors on the USD
-  stage; pybullet loads the SDF world; the URDF bundle's scene.json lists the light;
+  stage; pybullet and Drake load the SDF world (Drake also the MJCF); the URDF bundle's scene.json lists the light;
 - a light has no body in any format (it collides with nothing).
 """
 
@@ -75,6 +75,10 @@ def test_every_format_loads_the_lights(spec, tmp_path):
     assert stage.GetPrimAtPath("/World/sun/light").IsA(UsdLux.DistantLight)
     poses = readback.sdf_poses(out / "sdf" / "00000.sdf")
     assert "lamp" not in poses and {"table", "c1"} <= set(poses)
+    pytest.importorskip("pydrake")
+    for written in (out / "sdf" / "00000.sdf", out / "mjcf" / "00000.xml"):  # Drake ignores lights, with a warning
+        plant, _, models = readback.drake_load(written)
+        assert plant.HasBodyNamed("c1") and not plant.HasBodyNamed("lamp")
     bundle = json.loads((out / "urdf" / "00000" / "scene.json").read_text())
     assert [light["name"] for light in bundle["lights"]] == ["lamp", "sun"]
     assert "lamp" not in [o["name"] for o in bundle["objects"]]
