@@ -1,14 +1,18 @@
 """One MuJoCo model per spec (`scenario.model()`), scenes written into it without
 recompiling (`scenario.apply`), and `prsc.SceneEnv`, a Gymnasium environment on top.
 
-- For 100 scenes each of Table-Cube and bin_picking (random part sizes), every array that
+- For 10 scenes each of Table-Cube and bin_picking (random part sizes), every array that
   a scene decides (body poses, geom sizes and bounds, masses, inertias, colours, the home
   key, what mj_setConst derives) equals a freshly compiled model's, and so do the body
   poses after mj_forward (<= 1e-9 m);
-- a scene the shared model cannot hold (another set of objects, another shape, a mesh of
-  another size, another image) is an error naming the object;
-- Gymnasium's own env checker passes, and Sync and Async vector environments run;
-- the example in examples/ runs as written.
+- a scene the shared model cannot hold (another set of objects, shape, ground or camera
+  resolution, a mesh of another size, an image the spec cannot draw) is an error naming it;
+- every image a spec's `texture` can draw is loaded once: 30 scenes show a fresh model's
+  image on each geom, and two scenes of each image render equal pixel for pixel;
+- Gymnasium's own env checker passes (also with camera observations), and Sync and Async
+  vector environments run; camera observations equal a fresh model's renderer's images;
+  actions are bounded (a URDF arm's by its joints); `max_episode_steps` truncates;
+- the examples in examples/ run as written.
 """
 
 from __future__ import annotations
@@ -35,6 +39,20 @@ DECIDED = ("body_pos", "body_quat", "body_mass", "body_ipos", "body_iquat", "bod
            "geom_rgba", "cam_fovy", "qpos0", "qpos_spring", "key_qpos", "key_ctrl")
 
 
+def _at_home(model):
+    """New data of a model at its `home` key, forwarded (what `apply` leaves)."""
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _fresh_at_home(scene):
+    """A freshly compiled model of a scene and its data at `home`."""
+    fresh = prsc.mujoco_model(scene)
+    return fresh, _at_home(fresh)
+
+
 @pytest.mark.parametrize("spec", ["table_cube", "bin_picking"])
 def test_apply_gives_the_model_a_fresh_compile_gives(spec):
     # The sequential law draws bin_picking 10x faster than the joint one; apply does not care.
@@ -46,10 +64,7 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
     for index in range(1, SCENES + 1):
         scene = scenario.scene(0, index)
         scenario.apply(scene, model, data)
-        fresh = prsc.mujoco_model(scene)
-        fresh_data = mujoco.MjData(fresh)
-        mujoco.mj_resetDataKeyframe(fresh, fresh_data, fresh.key("home").id)
-        mujoco.mj_forward(fresh, fresh_data)
+        fresh, fresh_data = _fresh_at_home(scene)
         for name in DECIDED:
             worst[name] = max(worst[name], float(np.max(np.abs(getattr(model, name) - getattr(fresh, name)), initial=0)))
         worst["stat"] = max(worst.get("stat", 0.0), float(np.max(np.abs(model.stat.center - fresh.stat.center))),
@@ -62,7 +77,7 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
         assert len(sizes) == SCENES  # the parts' sizes really changed from scene to scene
 
 
-def test_a_scene_the_model_cannot_hold_is_an_error_naming_the_object():
+def test_a_scene_the_model_cannot_hold_is_an_error_naming_what_differs():
     scenario = prsc.load(REPO / "specs" / "table_cube.prs")
     model = scenario.model()
     data = mujoco.MjData(model)
@@ -75,7 +90,16 @@ def test_a_scene_the_model_cannot_hold_is_an_error_naming_the_object():
     next(o for o in other["objects"] if o["name"] == "c1")["model"] = "cylinder"
     with pytest.raises(PrscError, match="object 'c1' has other parts or shapes"):
         scenario.apply(other, model, data)
+    bare = copy.deepcopy(scene)
+    bare["params"]["ground"] = False
+    with pytest.raises(PrscError, match="it has no ground plane, the model has"):
+        scenario.apply(bare, model, data)
+    wide = copy.deepcopy(scene)
+    next(o for o in wide["objects"] if o["name"] == "camera")["camera"]["resolution"] = [320, 240]
+    with pytest.raises(PrscError, match=r"camera 'camera' has the resolution \(320, 240\) here, \(640, 480\)"):
+        scenario.apply(wide, model, data)
     scenario.apply(scene, model, data)  # still fine after a refusal
+    assert np.allclose(data.body("c1").xpos, next(o for o in scene["objects"] if o["name"] == "c1")["position"])
     with pytest.raises(PrscError, match="a model this scenario built"):
         scenario.apply(scene, prsc.mujoco_model(scene), data)
 
@@ -135,9 +159,7 @@ def test_every_image_is_loaded_once_and_apply_shows_the_scenes(tmp_path):
         image = next(o for o in scene["objects"] if o["name"] == "c1")["properties"]["texture"]
         if len(shown.setdefault(image, [])) == 2:
             continue
-        fresh_data = mujoco.MjData(fresh)
-        mujoco.mj_resetDataKeyframe(fresh, fresh_data, fresh.key("home").id)
-        mujoco.mj_forward(fresh, fresh_data)
+        fresh_data = _at_home(fresh)
         with mujoco.Renderer(fresh, 48, 64) as renderer:
             expected = _close_up(renderer, fresh, fresh_data, "c1")
         with mujoco.Renderer(model, 48, 64) as renderer:
@@ -159,23 +181,6 @@ def test_an_image_the_model_did_not_load_is_refused(tmp_path):
     next(o for o in scene["objects"] if o["name"] == "c1")["properties"]["texture"] = "other.png"
     with pytest.raises(PrscError, match="object 'c1' shows an image \\(other-.*\\) that is not among"):
         scenario.apply(scene, model, data)
-
-
-def test_another_ground_or_camera_resolution_is_refused():
-    scenario = prsc.load(REPO / "specs" / "table_cube.prs")
-    model = scenario.model()
-    data = mujoco.MjData(model)
-    scene = scenario.scene(0, 1)
-    bare = copy.deepcopy(scene)
-    bare["params"]["ground"] = False
-    with pytest.raises(PrscError, match="it has no ground plane, the model has"):
-        scenario.apply(bare, model, data)
-    wide = copy.deepcopy(scene)
-    next(o for o in wide["objects"] if o["name"] == "camera")["camera"]["resolution"] = [320, 240]
-    with pytest.raises(PrscError, match=r"camera 'camera' has the resolution \(320, 240\) here, \(640, 480\)"):
-        scenario.apply(wide, model, data)
-    scenario.apply(scene, model, data)  # then the scene the model holds, as before
-    assert np.allclose(data.body("c1").xpos, next(o for o in scene["objects"] if o["name"] == "c1")["position"])
 
 
 gymnasium = pytest.importorskip("gymnasium")
@@ -242,10 +247,7 @@ def test_camera_observations_are_the_spec_cameras_images():
     assert env.observation_space["camera"]["rgb"].shape == (480, 640, 3)
     for seed in (3, 4):  # one renderer for both scenes: the second is drawn after a reset
         observation, info = env.reset(seed=seed)
-        fresh = prsc.mujoco_model(info["scene"])
-        fresh_data = mujoco.MjData(fresh)
-        mujoco.mj_resetDataKeyframe(fresh, fresh_data, fresh.key("home").id)
-        mujoco.mj_forward(fresh, fresh_data)
+        fresh, fresh_data = _fresh_at_home(info["scene"])
         with mujoco.Renderer(fresh, 480, 640) as renderer:
             renderer.update_scene(fresh_data, "camera")
             expected = renderer.render()
