@@ -46,7 +46,8 @@ from prsc.errors import PrscError
 def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
     """An object of scene JSON without its pose and image: what decides its sizes, masses and joints."""
     signature = dict(raw)
-    del signature["position"], signature["quaternion"]
+    signature.pop("position", None)
+    signature.pop("quaternion", None)
     properties = raw.get("properties")
     if isinstance(properties, Mapping) and "texture" in properties:
         signature["properties"] = {k: v for k, v in properties.items() if k != "texture"}

@@ -91,21 +91,16 @@ class Scenario:
         return self.sampler.scenes(seed, indices, start)
 
     def image_choices(self) -> dict[str, tuple[str, ...]]:
-        """Per object with `with texture`, every image file name it can draw (a spec whose images
-        cannot be listed is an error at the expression: one model must load them all)."""
-        from prsc.errors import PrscError
+        """Per object whose `texture` is a file name or a choice among file names, every name it can
+        draw (`prsc check` refuses any other texture; the shared model refuses an object it lacks)."""
         from prsc.ir.mesh_sizes import constant_strings
 
         choices = {}
         for obj in self.sampler.program.objects:
             texture = obj.prop("texture")
-            if texture is None:
-                continue
-            names = constant_strings(texture)
-            if names is None:
-                raise PrscError(f"{obj.name}: a shared model loads every image `texture` can draw, and these cannot "
-                                "be listed: write a file name or Options([...]) of file names", texture.span)
-            choices[obj.name] = names
+            names = None if texture is None else constant_strings(texture)
+            if names is not None:
+                choices[obj.name] = names
         return choices
 
     def model(self, seed: int = 0, index: int = 0) -> mujoco.MjModel:

@@ -170,6 +170,19 @@ def test_every_image_is_loaded_once_and_apply_shows_the_scenes(tmp_path):
     assert len({views[0] for views in shown.values()}) == 3  # each image looks different
 
 
+def test_a_model_whose_images_cannot_be_listed_is_refused_when_built(tmp_path):
+    # `prsc check` refuses a texture that is not a file name or a choice among them; a shared
+    # model told no list for a textured object refuses to be built, not at a later reset.
+    from prsc.backends.shared_model import SharedModel
+    from prsc.backends.store import AssetStore
+    from prsc.scenario import in_memory_root
+
+    scene = prsc.load(_textured_table_cube(tmp_path)).scene(0, 0)
+    root = in_memory_root()
+    with pytest.raises(PrscError, match="object 'c1': its image .* is not drawn from a list of file names"):
+        SharedModel(scene, prsc.mujoco_spec(scene), AssetStore(root / "assets"), root / "mjcf", images={})
+
+
 def test_an_image_the_model_did_not_load_is_refused(tmp_path):
     scenario = prsc.load(_textured_table_cube(tmp_path))
     model = scenario.model()
