@@ -14,7 +14,7 @@ from prsc.assets.articulated import RobotModel, robot_model
 from prsc.assets.registry import part_recipe
 from prsc.user_assets.asset_files import ROOT_OFFSET, names_asset_file
 from prsc.backends.inertia import Inertial, composite_inertial
-from prsc.backends.scene import CameraSpec, Scene, SceneObject
+from prsc.backends.scene import CameraSpec, LightSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore, pbr_maps, texture_of
 from prsc.errors import PrscError
 from prsc.geometry.container import Interior, declared_interior
@@ -60,8 +60,13 @@ class Body:
 
     @property
     def fixed(self) -> bool:
-        """Fixed in the world: a static object, or a camera (always fixed where sampled)."""
-        return self.obj.static or self.obj.camera is not None
+        """Fixed in the world: a static object, a camera (always fixed where sampled) or a light."""
+        return self.obj.static or self.obj.camera is not None or self.obj.light is not None
+
+    @property
+    def light(self) -> LightSpec | None:
+        """The light this object is (a light has no body in any format), or None."""
+        return self.obj.light
 
     @property
     def mount_position(self) -> tuple[float, float, float]:
@@ -137,6 +142,8 @@ def object_interior(obj: SceneObject) -> Interior | None:
 
 def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
+    if obj.light is not None:
+        return Body(obj, (), MOUNT_INERTIAL, None, None)
     try:
         # A file asset is a robot when the scene gives it a `tcp` (every Robot subclass does).
         folders = mesh_folders(scene.spec, store.mesh_dirs) if obj.model is not None and names_asset_file(obj.model) else ()
@@ -168,19 +175,31 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     return Body(obj, parts, composite_inertial(parts, obj.mass), None, obj.camera)
 
 
-def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
-    """`with texture`: the image on the object's visible boxes, cylinders and spheres."""
+def texture_image(obj: SceneObject, scene: Scene, store: AssetStore) -> str:
+    """The store's copy of the image an object's `texture` names (absolute path)."""
     source = resolve_mesh_source(obj, scene, store, "texture")
     try:
-        image = str(store.texture_image(source))
+        return str(store.texture_image(source))
     except PrscError as error:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
+
+
+def _textured(parts: tuple[Part, ...], obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
+    """`with texture`: the image on the object's visible boxes, cylinders and spheres."""
+    image = texture_image(obj, scene, store)
     return tuple(replace(p, texture=image) if p.shape in TEXTURED_SHAPES and p.visible else p for p in parts)
 
 
 def resolve_bodies(scene: Scene, store: AssetStore) -> tuple[Body, ...]:
     """Resolve every object of a scene, in scene order."""
     return tuple(resolve_body(obj, scene, store) for obj in scene.objects)
+
+
+def light_directions(quaternions: np.ndarray) -> np.ndarray:
+    """Where lights of these orientations (w x y z, one per row) shine: their local +y in the world."""
+    w, x, y, z = np.asarray(quaternions, dtype=float).reshape(-1, 4).T
+    directions = np.stack([2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)], axis=1)
+    return directions / np.linalg.norm(directions, axis=1, keepdims=True)
 
 
 def object_matrix(obj: SceneObject) -> np.ndarray:

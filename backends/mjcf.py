@@ -14,7 +14,7 @@ Layout (names the runner relies on):
   (the asset's home where the spec sets none), position servos holding them.
 
 Speed: a scene's MJCF is one template per scene topology (which bodies, parts, robots,
-cameras; `_topology`), built once per process with MjSpec and cached, with a slot for
+cameras: backends/scene_structure.py), built once per process with MjSpec and cached, with a slot for
 every number that changes from scene to scene (`_stamps`: poses, sizes, masses, colours,
 file paths, the `home` key, the model name). A scene then costs only its numbers,
 formatted exactly (MjSpec writes 6 significant digits; the slots hold full precision).
@@ -32,9 +32,10 @@ from pathlib import Path
 from prsc.user_assets.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
-from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, resolve_bodies
+from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, light_directions, resolve_bodies
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
+from prsc.backends.scene_structure import scene_structure, template_key
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.errors import PrscError
@@ -137,7 +138,8 @@ def _geom_type(shape: str):
     }[shape]
 
 
-def _geom_size(part) -> tuple[float, ...]:
+def geom_size(part) -> tuple[float, ...]:
+    """A primitive part's MuJoCo `size` (half extents, radius and half height, or radius)."""
     if part.shape == "box":
         return tuple(s / 2 for s in part.size)
     if part.shape == "cylinder":
@@ -168,8 +170,19 @@ def _map_roles() -> dict:
     return {"normal": mujoco.mjtTextureRole.mjTEXROLE_NORMAL, "orm": mujoco.mjtTextureRole.mjTEXROLE_ORM}
 
 
-def _geom_rgba(obj, part) -> tuple[float, ...]:
+def geom_rgba(obj, part) -> tuple[float, ...]:
+    """A part's MuJoCo `rgba`: white under an image (it shows its own colours), else the object's colour."""
     return TEXTURED_RGBA if part.texture is not None else tuple(obj.color)
+
+
+def light_attributes(body: Body) -> dict[str, str]:
+    """A light object's MJCF `light` attributes that change from scene to scene, as text: a light of
+    the world body where the object is, shining along the object's +y."""
+    light = body.light
+    assert light is not None
+    return {"pos": nums(body.obj.position), "dir": nums(light_directions(body.obj.quaternion)[0]),
+            "diffuse": nums(light.diffuse), "cutoff": num(light.cutoff),
+            "castshadow": "true" if light.cast_shadow else "false"}
 
 
 def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dict[str, str]]:
@@ -179,6 +192,9 @@ def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dic
     exact: dict[tuple[str, str], dict[str, str]] = {}
     for body in bodies:
         obj, inertial = body.obj, body.inertial
+        if body.light is not None:
+            exact[("light", obj.name)] = light_attributes(body)
+            continue
         exact[("body", obj.name)] = {"pos": nums(obj.position), "quat": nums(obj.quaternion)}
         exact[("inertial", obj.name)] = {
             "pos": nums(inertial.com), "quat": nums(inertial.principal),
@@ -186,11 +202,11 @@ def _stamps(bodies: tuple[Body, ...], folder: Path) -> dict[tuple[str, str], dic
         }
         for part in body.parts:
             gname = f"{obj.name}/{part.name}"
-            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(_geom_rgba(obj, part))}
+            stamp = {"pos": nums(part.position), "quat": nums(part.quaternion), "rgba": nums(geom_rgba(obj, part))}
             if part.shape == "mesh":
                 exact[("mesh", gname)] = {"file": _attribute(relative_path(part.mesh, folder)), "scale": nums(part.size)}
             else:
-                stamp["size"] = nums(_geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
+                stamp["size"] = nums(geom_size(part)[: {"box": 3, "cylinder": 2, "sphere": 1}[part.shape]])
             if part.texture is not None:
                 exact[("texture", gname)] = {"file": _attribute(relative_path(part.texture, folder))}
             for role, image in part.maps:
@@ -232,6 +248,14 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
         )
     for body in bodies:
         obj = body.obj
+        if body.light is not None:
+            kind = {"directional": mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, "spot": mujoco.mjtLightType.mjLIGHT_SPOT}
+            spec.worldbody.add_light(
+                name=obj.name, type=kind[body.light.kind], pos=list(obj.position),
+                dir=list(light_directions(obj.quaternion)[0]), diffuse=list(body.light.diffuse),
+                specular=[0.1, 0.1, 0.1], cutoff=body.light.cutoff, castshadow=body.light.cast_shadow,
+            )
+            continue
         b = spec.worldbody.add_body(name=obj.name, pos=list(obj.position), quat=list(obj.quaternion))
         if not body.fixed:
             b.add_freejoint(name=obj.name)
@@ -246,7 +270,7 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
             gname = f"{obj.name}/{part.name}"
             kwargs = dict(
                 name=gname, type=_geom_type(part.shape), pos=list(part.position), quat=list(part.quaternion),
-                rgba=list(_geom_rgba(obj, part)), friction=list(FRICTION), solref=list(SOLREF),
+                rgba=list(geom_rgba(obj, part)), friction=list(FRICTION), solref=list(SOLREF),
                 condim=CONDIM_FREE if not body.fixed else 3,
             )
             if part.shape == "mesh":
@@ -255,7 +279,7 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
                 spec.add_mesh(name=gname, file=str(part.mesh), scale=list(part.size))
                 kwargs["meshname"] = gname
             else:
-                kwargs["size"] = list(_geom_size(part))
+                kwargs["size"] = list(geom_size(part))
             if part.texture is not None:
                 # A mesh reads its image through its UVs; `with texture` shows it on each face of a box.
                 kind = mujoco.mjtTexture.mjTEXTURE_2D if part.shape == "mesh" else mujoco.mjtTexture.mjTEXTURE_CUBE
@@ -298,7 +322,7 @@ def _stamp(root: ET.Element, exact: dict[tuple[str, str], dict[str, str]], slots
             element.set(attr, _slot(len(slots)))
             slots.append(("exact", key, attr))
 
-    for tag in ("mesh", "texture"):
+    for tag in ("mesh", "texture", "light"):
         for element in root.iter(tag):
             if (tag, element.get("name", "")) in exact:
                 mark(element, (tag, element.get("name", "")))
@@ -356,20 +380,10 @@ def _attribute(text: str) -> str:
     return text.translate(_ATTRIBUTE_ESCAPES)
 
 
-def _topology(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path) -> tuple:
-    """Everything of a scene's MJCF that `_stamps` does not hold: scenes alike in this share a template."""
-    return (scene.ground, str(store.root), str(folder), tuple(
-        (b.obj.name, b.fixed, b.robot, None if b.camera is None else (b.camera.width, b.camera.height),
-         tuple((p.name, p.shape, p.collides, p.visible, p.texture is not None, tuple(r for r, _ in p.maps))
-               for p in b.parts),
-         tuple(sorted(b.obj.joints)) if b.robot is not None else ())
-        for b in bodies))
-
-
 def _template(scene: Scene, bodies: tuple[Body, ...], store: AssetStore, folder: Path,
               exact: dict[tuple[str, str], dict[str, str]]) -> _Template:
     """The template of this scene's topology, built with MjSpec once (cached per process)."""
-    key = _topology(scene, bodies, store, folder)
+    key = template_key(scene_structure(scene, bodies), store.root, folder)
     if key in _templates:
         return _templates[key]
     root = ET.fromstring(_scene_spec(scene, bodies).to_xml())

@@ -22,6 +22,25 @@ class CameraSpec:
     height: int
 
 
+LIGHT_KINDS = ("directional", "spot")
+
+
+@dataclass(frozen=True)
+class LightSpec:
+    """A light object (LANGUAGE.md §6): it shines along its local +y from its position."""
+
+    kind: str  # "directional" | "spot"
+    color: tuple[float, float, float]  # the object's colour (RGB)
+    intensity: float
+    cutoff: float  # a spot's half angle (degrees)
+    cast_shadow: bool
+
+    @property
+    def diffuse(self) -> tuple[float, float, float]:
+        """Its colour times its intensity (MuJoCo's `diffuse`)."""
+        return tuple(self.intensity * c for c in self.color)  # type: ignore[return-value]
+
+
 @dataclass(frozen=True)
 class SceneObject:
     """One object of a scene: its box (centre pose and size) and physical properties."""
@@ -40,6 +59,7 @@ class SceneObject:
     properties: Mapping[str, Any]
     label: str = ""  # the user's name (scene JSON); `name` is its element name (prsc.backends.names)
     joints: Mapping[str, float] = field(default_factory=dict)  # an asset's starting joint values (docs/assets.md)
+    light: LightSpec | None = None  # a light, not a body
 
 
 @dataclass(frozen=True)
@@ -115,6 +135,24 @@ def _camera(value: Any, where: str) -> CameraSpec | None:
     return CameraSpec(fovy=fovy, width=int(res[0]), height=int(res[1]))
 
 
+def _light(properties: Mapping[str, Any], color: tuple[float, ...], where: str) -> LightSpec | None:
+    if properties.get("light") is not True:
+        return None
+    kind = properties.get("kind", "directional")
+    if kind not in LIGHT_KINDS:
+        raise _fail(f"{where}.properties.kind", f"a light is one of {', '.join(LIGHT_KINDS)}, got {kind!r}")
+    intensity = _floats([properties.get("intensity", 1.0)], 1, f"{where}.properties.intensity")[0]
+    if intensity < 0.0:
+        raise _fail(f"{where}.properties.intensity", f"must not be negative, got {intensity}")
+    cutoff = _floats([properties.get("cutoff", 45.0)], 1, f"{where}.properties.cutoff")[0]
+    if not 0.0 < cutoff <= 90.0:
+        raise _fail(f"{where}.properties.cutoff", f"must lie in (0, 90] degrees, got {cutoff}")
+    shadow = properties.get("castShadow", False)
+    if not isinstance(shadow, bool):
+        raise _fail(f"{where}.properties.castShadow", f"expected true or false, got {shadow!r}")
+    return LightSpec(kind, tuple(color[:3]), intensity, cutoff, shadow)  # type: ignore[arg-type]
+
+
 def _object(raw: Any, k: int) -> dict[str, Any]:
     """The fields of one scene object (SceneObject's, but its element name), validated."""
     where = f"objects[{k}]"
@@ -160,6 +198,7 @@ def _object(raw: Any, k: int) -> dict[str, Any]:
         raise _fail(f"{where}.joints", "expected an object of joint name -> value")
     joints = {k: _floats([v], 1, f"{where}.joints.{k}")[0] for k, v in joints.items()}
     cls = raw.get("class", "Object")
+    color = _color(raw.get("color", [0.7, 0.7, 0.7, 1.0]), f"{where}.color")
     return dict(
         label=name,
         cls=str(cls),
@@ -168,13 +207,19 @@ def _object(raw: Any, k: int) -> dict[str, Any]:
         dimensions=dims,
         static=static,
         mass=mass,
-        color=_color(raw.get("color", [0.7, 0.7, 0.7, 1.0]), f"{where}.color"),
+        color=color,
         shape=shape,
         model=model or None,
         camera=camera,
         properties=properties,
         joints=joints,
+        light=_light(properties, color, where),
     )
+
+
+def parse_object(raw: Any, k: int, element: str) -> SceneObject:
+    """Object `k` of a scene JSON, validated, whose element name is known (a shared model's reset)."""
+    return SceneObject(name=element, **_object(raw, k))
 
 
 def parse_scene(raw: Mapping[str, Any]) -> Scene:

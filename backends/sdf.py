@@ -28,6 +28,7 @@ pybullet loads at zero, and docs/backends.md shows the three lines that set the 
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from functools import lru_cache
 from pathlib import Path
@@ -35,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from prsc.assets.urdf_tree import Geometry
-from prsc.backends.bodies import Body, resolve_bodies
+from prsc.backends.bodies import Body, light_directions, resolve_bodies
 from prsc.backends.gazebo_camera import camera_sensor_body
 from prsc.backends.inertia import Inertial
 from prsc.backends.mjcf import FRICTION
@@ -263,6 +264,24 @@ def _ground_model(world: ET.Element, name: str) -> None:
             _material(element, (0.8, 0.8, 0.78, 1.0))
 
 
+def _light(world: ET.Element, body: Body) -> None:
+    """A light object: an SDF `<light>` of the world where the object is, its direction the object's +y."""
+    light = body.light
+    assert light is not None
+    element = ET.SubElement(world, "light", name=body.obj.name, type=light.kind)
+    ET.SubElement(element, "cast_shadows").text = "true" if light.cast_shadow else "false"
+    _pose(element, body.obj.position, (1.0, 0.0, 0.0, 0.0))
+    ET.SubElement(element, "diffuse").text = nums((*light.color, 1.0))  # a colour: each component in [0, 1]
+    ET.SubElement(element, "intensity").text = num(light.intensity)  # SDF 1.9
+    ET.SubElement(element, "specular").text = "0.1 0.1 0.1 1"
+    ET.SubElement(element, "direction").text = nums(light_directions(body.obj.quaternion)[0])
+    if light.kind == "spot":
+        spot = ET.SubElement(element, "spot")
+        ET.SubElement(spot, "inner_angle").text = "0"
+        ET.SubElement(spot, "outer_angle").text = num(math.radians(light.cutoff))
+        ET.SubElement(spot, "falloff").text = "1"
+
+
 def sdf_text(scene: Scene, path: Path, store: AssetStore) -> str:
     """The SDF world of a scene to be written at `path` (mesh URIs relative to it)."""
     folder = Path(path).parent
@@ -278,7 +297,9 @@ def sdf_text(scene: Scene, path: Path, store: AssetStore) -> str:
         _ground_model(world, ground)
     pieces: list[str] = []
     for body in bodies:
-        if body.robot is not None:
+        if body.light is not None:
+            _light(world, body)
+        elif body.robot is not None:
             _robot_model(world, body, store, folder, pieces)
         else:
             _parts_model(world, body, folder)

@@ -1,93 +1,57 @@
 """One MuJoCo model per spec, and new scenes written into it without recompiling
 (docs/learning.md): what an RL reset needs.
 
-`SharedModel(scene, model, store, folder)` wraps the compiled MJCF of one scene (the
-library's `scenario.model()`, prsc/scenario.py); every scene of the same spec has the same
-bodies, joints, geoms and actuators, so `apply` writes another scene's numbers into that
-model and its data:
+`SharedModel(scene, spec, store, folder, images)` compiles the MJCF of one scene (the
+library's `scenario.model()`, prsc/scenario.py) with every image the spec can draw loaded
+once; every scene of the same spec has the same structure (backends/scene_structure.py:
+bodies, joints, geoms, cameras, actuators, ground), so `apply` writes another scene's
+numbers into that model and its data:
 
-- poses: free bodies' `qpos` (and their `qpos0`, `body_pos`/`body_quat`, as a fresh model
+- poses: free bodies' `qpos` (and their `qpos0`, `qpos_spring`, `body_pos`/`body_quat`, as a fresh model
   has them), fixed bodies' `body_pos`/`body_quat` (cameras, robots, furniture);
 - primitive geoms: `geom_size`, `geom_pos`/`geom_quat`, and what MuJoCo's compiler derives
   from them (`geom_rbound`, `geom_aabb`); bodies' mass, centre of mass and inertia, computed
   by the same code as the MJCF writer (prsc.backends.bodies); `mj_setConst` then redoes
   the constants that depend on them;
-- colours, camera field of view, robots' joint values and the `home` keyframe (qpos, ctrl);
+- each textured geom's material (`geom_matid`): the one showing the scene's image;
+- colours, camera field of view, lights, robots' joint values and the `home` keyframe (qpos, ctrl);
+- `stat.center`/`stat.extent` as the compiler derives them (cameras' clip planes scale with them);
 - then `mj_resetDataKeyframe(home)` and `mj_forward`.
 
-A scene the shared model cannot express is an error naming the object and why: another
-set of objects, another shape, model or part layout, a mesh whose size changes (a mesh's
-scale is baked into its vertices), another image (`with texture Options(...)`: the image is
-compiled into the model's texture data), or a robot from another file.
+Only the objects whose JSON changed since the scene applied last are parsed and resolved
+again; an object whose image alone changed only switches material.
+
+A scene the shared model cannot hold is an error naming what differs: another structure
+(another set of objects, ground, shape, robot, camera resolution...), a mesh whose file or
+size changes (a mesh's scale is baked into its vertices), or an image the model did not load.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import replace
 from pathlib import Path
-from typing import Any, Mapping
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
-from prsc.backends.bodies import Body, resolve_bodies
-from prsc.backends.mjcf import RobotFragment, _geom_rgba, _geom_size, robot_fragment
-from prsc.backends.scene import parse_scene, scene_position, unit_quaternion
+from prsc.backends.bodies import Body, light_directions, resolve_body, resolve_bodies, texture_image
+from prsc.backends.mjcf import RobotFragment, geom_rgba, geom_size, robot_fragment
+from prsc.backends.scene import Scene, parse_object, parse_scene, scene_position, unit_quaternion
+from prsc.backends.scene_structure import SceneStructure, difference, scene_structure
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
 
 
-@dataclass(frozen=True)
-class _Layout:
-    """What must be equal between two scenes for one model to hold both."""
-
-    objects: tuple[tuple[Any, ...], ...]  # per object: name, fixed, robot key, camera, parts' (name, shape, mesh, ..., texture)
-
-    @staticmethod
-    def of(bodies: tuple[Body, ...]) -> "_Layout":
-        """The layout of resolved bodies."""
-        return _Layout(tuple(
-            (b.name, b.fixed, b.robot.key if b.robot else None, b.camera is not None,
-             tuple((p.name, p.shape, p.mesh, p.collides, p.visible, p.texture) for p in b.parts))
-            for b in bodies
-        ))
-
-
-def _difference(old: _Layout, new: _Layout) -> str:
-    """Why `new` does not fit a model built for `old`, naming the object."""
-    names_old, names_new = [o[0] for o in old.objects], [o[0] for o in new.objects]
-    if names_old != names_new:
-        return (f"its objects are {', '.join(names_new)}, the model's {', '.join(names_old)} "
-                "(another number of objects or other names)")
-    for before, after in zip(old.objects, new.objects):
-        if before == after:
-            continue
-        name = after[0]
-        if before[1] != after[1]:
-            return f"object {name!r} is {'fixed' if after[1] else 'free'} here, {'fixed' if before[1] else 'free'} in the model"
-        if before[2] != after[2]:
-            return f"object {name!r} is another robot ({after[2]}) than in the model ({before[2]})"
-        shapes_before = [p[:2] for p in before[4]]
-        shapes_after = [p[:2] for p in after[4]]
-        if shapes_before != shapes_after:
-            return f"object {name!r} has other parts or shapes ({shapes_after}) than in the model ({shapes_before})"
-        images_before = [p[5] for p in before[4]]
-        images_after = [p[5] for p in after[4]]
-        if images_before != images_after:
-            # An image is compiled into the model's texture data, like a mesh's vertices.
-            return (f"object {name!r} shows another image ({_names(images_after)}) than in the model "
-                    f"({_names(images_before)}); a shared model cannot change a texture: compile each scene")
-        return f"object {name!r}'s parts differ from the model's ({after[4]} vs {before[4]})"
-    return "its layout differs"  # pragma: no cover - equal layouts are not compared
-
-
-def _names(images: list[str | None]) -> str:
-    """The file names of parts' images, for an error."""
-    return ", ".join(Path(i).name if i else "none" for i in images)
-
-
 def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
-    """An object of scene JSON without its pose: what decides its sizes, masses and joints."""
-    return {k: v for k, v in raw.items() if k not in ("position", "quaternion")}
+    """An object of scene JSON without its pose and image: what decides its sizes, masses and joints."""
+    signature = dict(raw)
+    signature.pop("position", None)
+    signature.pop("quaternion", None)
+    properties = raw.get("properties")
+    if isinstance(properties, Mapping) and "texture" in properties:
+        signature["properties"] = {k: v for k, v in properties.items() if k != "texture"}
+    return signature
 
 
 def _bounds(shape: str, size: tuple[float, ...]) -> tuple[float, np.ndarray]:
@@ -102,25 +66,106 @@ def _bounds(shape: str, size: tuple[float, ...]) -> tuple[float, np.ndarray]:
     return float(radius), np.array([radius, radius, radius])
 
 
+def _image_name(raw: Mapping[str, Any]) -> Any:
+    """The image an object of scene JSON names (`with texture`), or None."""
+    properties = raw.get("properties")
+    return properties.get("texture") if isinstance(properties, Mapping) else None
+
+
+def _images(scene: Scene, bodies: tuple[Body, ...], store: AssetStore,
+            choices: Mapping[str, Sequence[str]]) -> tuple[str, ...]:
+    """Every image (the store's copy) that the objects of the spec can show, once each."""
+    paths: dict[str, None] = {}
+    for body in bodies:
+        obj = body.obj
+        if "texture" not in obj.properties:
+            continue
+        names = choices.get(obj.label)
+        if names is None:
+            raise PrscError(f"object {obj.label!r}: its image (`with texture`) is not drawn from a list of file names, "
+                            "so one model cannot load every image it may show: write `with texture "
+                            "Options([...])`, or compile each scene", obj=obj.label)
+        for name in names:
+            paths.setdefault(texture_image(replace(obj, properties={**obj.properties, "texture": name}), scene, store))
+    return tuple(paths)
+
+
+class _Statistics:
+    """`model.stat.center` and `extent` as MuJoCo's compiler sets them at `qpos0`: the box round the
+    bodies, their centres of mass, joint anchors, sites and geoms' bounding spheres (a plane's:
+    a tenth of its size, 0.01 when infinite, as measured on MuJoCo 4.0). Cameras and the free
+    camera scale their clip planes by `extent`, so an image depends on them."""
+
+    def __init__(self, model) -> None:
+        import mujoco
+
+        planes = (model.geom_rbound == 0) & (model.geom_type == int(mujoco.mjtGeom.mjGEOM_PLANE))
+        finite = np.max(model.geom_size[:, :2], axis=1)
+        plane_radius = np.where(finite > 0, 0.1 * finite, 0.01)
+        # Which geoms count is structure (a sized primitive or a mesh has a radius; a plane its own).
+        self.geoms = np.flatnonzero((model.geom_rbound > 0) | planes)
+        self.planes = np.flatnonzero(planes[self.geoms])
+        self.plane_radius = plane_radius[planes]
+
+    def set(self, model, data) -> None:
+        """Set them from `data`'s kinematics at `qpos0`."""
+        radius = model.geom_rbound[self.geoms]
+        radius[self.planes] = self.plane_radius
+        centres = data.geom_xpos[self.geoms]
+        points = np.concatenate((data.xpos[1:], data.xipos[1:], data.xanchor, data.site_xpos,
+                                 centres - radius[:, None], centres + radius[:, None]))
+        low, high = points.min(axis=0), points.max(axis=0)
+        model.stat.center[:] = (low + high) / 2
+        model.stat.extent = max(float(np.max(high - low)), 1e-5, 2 * model.stat.meansize)
+
+
 class SharedModel:
     """A compiled MuJoCo model of a spec's scenes, and how to write a scene into it."""
 
-    def __init__(self, scene: Mapping[str, Any], model, store: AssetStore, folder: Path) -> None:
-        self.model = model
+    def __init__(self, scene_json: Mapping[str, Any], spec, store: AssetStore, folder: Path,
+                 images: Mapping[str, Sequence[str]]) -> None:
+        """Compile `spec` (the MjSpec of `scene_json`) with every image of `images` (object -> the
+        file names its `texture` can draw) loaded once."""
+        import mujoco
+
         self.store = store
         self.folder = folder
-        bodies = resolve_bodies(parse_scene(scene), store)
-        self.layout = _Layout.of(bodies)
-        # A mesh's scale is baked into the compiled vertices: the model's must stay.
-        self._mesh_scales = {(b.name, p.name): np.array(p.size) for b in bodies for p in b.parts if p.shape == "mesh"}
-        self._signatures: list[dict[str, Any]] | None = None  # of the scene applied last: all but poses
-        self._bodies = bodies
-        self._body_ids = np.array([model.body(b.name).id for b in bodies], dtype=int)
+        scene = parse_scene(scene_json)
+        bodies = resolve_bodies(scene, store)
+        paths = _images(scene, bodies, store, images)
+        for k, path in enumerate(paths):
+            # As the MJCF writer shows an image on a primitive: a cube texture, its own colour space.
+            name = f"prsc_image/{k}"
+            spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_CUBE, file=path,
+                             colorspace=mujoco.mjtColorSpace.mjCOLORSPACE_AUTO)
+            spec.add_material(name=name).textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = name
+        self.model = model = spec.compile()
+        self._image_material = {path: model.material(f"prsc_image/{k}").id for k, path in enumerate(paths)}
+        self.structure: SceneStructure = scene_structure(scene, bodies)
+        # A mesh's file and scale are baked into the compiled vertices: the model's must stay.
+        self._meshes = {(b.name, p.name): (p.mesh, np.array(p.size)) for b in bodies for p in b.parts if p.shape == "mesh"}
+        self._scene = scene
+        self._bodies = list(bodies)
+        self._signatures: list[dict[str, Any]] | None = None  # of the scene applied last: all but poses and images
+        self._image_names: list[Any] = []  # of the scene applied last, per object
+        self._params: Any = None
+        self._materials: dict[tuple[int, Any], int] = {}  # (object index, image name) -> material id
+        self._textured_geoms = [np.array([model.geom(f"{b.name}/{p.name}").id for p in b.parts
+                                          if p.texture is not None and p.shape != "mesh"], dtype=int) for b in bodies]
+        # Objects are bodies or lights (a light of the world body, where the object is).
+        self._is_light = np.array([b.light is not None for b in bodies], dtype=bool)
+        self._body_ids = np.array([model.body(b.name).id for b in bodies if b.light is None], dtype=int)
+        self._light_ids = np.array([model.light(b.name).id for b in bodies if b.light is not None], dtype=int)
         self._free = np.array([not b.fixed for b in bodies], dtype=bool)
         # Each free body's 7 qpos entries (position, quaternion), in scene order.
         self._free_qpos = np.array([model.jnt_qposadr[model.joint(b.name).id] + k
                                     for b in bodies if not b.fixed for k in range(7)], dtype=int)
         self._home = model.key("home").id if model.nkey else None
+        # mj_setConst leaves `data` at `qpos_spring`, where the statistics are taken when it is `qpos0`.
+        fixed = np.ones(model.nq, dtype=bool)
+        fixed[self._free_qpos] = False
+        self._spring_at_qpos0 = bool(np.array_equal(model.qpos_spring[fixed], model.qpos0[fixed]))
+        self._statistics = _Statistics(model)
         self._robot_qpos = np.zeros(model.nq)
         self._robot_ctrl = np.zeros(model.nu)
 
@@ -129,15 +174,22 @@ class SharedModel:
         import mujoco
 
         model = self.model
-        if not self._only_poses_changed(scene_json):
+        changed = self._changed(scene_json)
+        if changed is None:
             self._apply_whole(scene_json)
+        elif changed:
+            self._apply_objects(scene_json, changed)
         poses = np.array([scene_position(raw.get("position"), f"scene JSON: object {body.name!r}.position")
                           + unit_quaternion(raw.get("quaternion"), f"scene JSON: object {body.name!r}.quaternion")
                           for body, raw in zip(self._bodies, scene_json["objects"])], dtype=float).reshape(-1, 7)
-        model.body_pos[self._body_ids] = poses[:, :3]
-        model.body_quat[self._body_ids] = poses[:, 3:]
+        model.body_pos[self._body_ids] = poses[~self._is_light, :3]
+        model.body_quat[self._body_ids] = poses[~self._is_light, 3:]
+        if len(self._light_ids):
+            model.light_pos[self._light_ids] = poses[self._is_light, :3]
+            model.light_dir[self._light_ids] = light_directions(poses[self._is_light, 3:])
         free = poses[self._free]
         model.qpos0[self._free_qpos] = free.ravel()
+        model.qpos_spring[self._free_qpos] = free.ravel()  # the compiler's copy of qpos0 for free joints
         home = self._home
         if home is not None:
             # The home key holds free bodies where they are and robots at their joints.
@@ -147,52 +199,112 @@ class SharedModel:
             if model.nu:
                 model.key_ctrl[home] = self._robot_ctrl
         mujoco.mj_setConst(model, data)
+        if not self._spring_at_qpos0:  # mj_setConst leaves `data` at `qpos_spring`
+            data.qpos[:] = model.qpos0
+            mujoco.mj_kinematics(model, data)
+        self._statistics.set(model, data)
         if home is not None:
             mujoco.mj_resetDataKeyframe(model, data, home)
         else:
             mujoco.mj_resetData(model, data)
         mujoco.mj_forward(model, data)
 
-    def _only_poses_changed(self, scene_json: Mapping[str, Any]) -> bool:
-        """Whether every object but its pose is as in the scene applied last (a cheap reset)."""
+    def _changed(self, scene_json: Mapping[str, Any]) -> list[int] | None:
+        """The objects to parse again (only their image changed, to a known one: switched here), or
+        None when the whole scene must be read (the first, or another set of objects or params)."""
         objects = scene_json.get("objects") if isinstance(scene_json, Mapping) else None
-        return (self._signatures is not None and isinstance(objects, list) and len(objects) == len(self._signatures)
-                and all(isinstance(o, Mapping) and _signature(o) == s for o, s in zip(objects, self._signatures)))
+        if (self._signatures is None or not isinstance(objects, list) or len(objects) != len(self._signatures)
+                or scene_json.get("params") != self._params):
+            return None
+        changed = []
+        for k, (raw, signature) in enumerate(zip(objects, self._signatures)):
+            if not isinstance(raw, Mapping) or _signature(raw) != signature:
+                changed.append(k)
+                continue
+            image = _image_name(raw)
+            if image != self._image_names[k]:
+                material = self._materials.get((k, image))
+                if material is None:
+                    changed.append(k)
+                    continue
+                self.model.geom_matid[self._textured_geoms[k]] = material
+                self._image_names[k] = image
+        return changed
+
+    def _apply_objects(self, scene_json: Mapping[str, Any], changed: list[int]) -> None:
+        """Parse, resolve and write only the objects in `changed` (the others are as applied last)."""
+        objects = scene_json["objects"]
+        bodies = list(self._bodies)
+        for k in changed:
+            if not isinstance(objects[k], Mapping) or objects[k].get("name") != bodies[k].obj.label:
+                self._apply_whole(scene_json)  # another name: the whole scene says how it differs
+                return
+            bodies[k] = resolve_body(parse_object(objects[k], k, bodies[k].name), self._scene, self.store)
+        fresh = scene_structure(self._scene, tuple(bodies[k] for k in changed)).objects
+        objects_structure = list(self.structure.objects)
+        for k, structure in zip(changed, fresh):
+            objects_structure[k] = structure
+        self._check(replace(self.structure, objects=tuple(objects_structure)), scene_json.get("index"))
+        for k in changed:
+            self._write_body(k, bodies[k], objects[k])
+        self._bodies = bodies
+        if any(bodies[k].robot is not None for k in changed):
+            self._robot_home()
 
     def _apply_whole(self, scene_json: Mapping[str, Any]) -> None:
-        """Validate the scene and write everything but the poses: sizes, masses, colours, joints."""
+        """Validate the scene and write everything but the poses: sizes, masses, colours, images, joints."""
         scene = parse_scene(scene_json)
         bodies = resolve_bodies(scene, self.store)
-        layout = _Layout.of(bodies)
-        if layout != self.layout:
-            raise PrscError(f"scene {scene.index} does not fit this spec's shared MuJoCo model: "
-                            f"{_difference(self.layout, layout)}")
+        self._check(scene_structure(scene, bodies), scene.index)
+        self._signatures = [_signature(o) for o in scene_json["objects"]]
+        self._image_names = [None] * len(bodies)
+        self._params = scene_json.get("params")
+        self._scene = scene
+        for k, (body, raw) in enumerate(zip(bodies, scene_json["objects"])):
+            self._write_body(k, body, raw)
+        self._bodies = list(bodies)
+        self._robot_home()
+
+    def _check(self, structure: SceneStructure, index: Any) -> None:
+        """Refuse a scene whose structure is not the model's, saying what differs."""
+        why = difference(self.structure, structure)
+        if why is not None:
+            raise PrscError(f"scene {index} does not fit this spec's shared MuJoCo model: {why}")
+
+    def _robot_home(self) -> None:
+        """The robots' joints and servo targets of the home key, from the bodies applied."""
         robot_qpos = np.zeros(self.model.nq)
         ctrl: list[float] = []
-        for body in bodies:
-            self._write_body(body)
-            if body.robot is not None:
-                fragment = robot_fragment(body.robot, f"{body.name}/", self.store, self.folder)
-                joints, servo = self._robot_home(fragment, body)
-                for name, value in zip(fragment.joints, joints):
-                    robot_qpos[self.model.jnt_qposadr[self.model.joint(f"{body.name}/{name}").id]] = value
-                ctrl += servo
-        self._bodies = bodies
+        for body in self._bodies:
+            if body.robot is None:
+                continue
+            fragment = robot_fragment(body.robot, f"{body.name}/", self.store, self.folder)
+            joints, servo = self._robot_values(fragment, body)
+            for name, value in zip(fragment.joints, joints):
+                robot_qpos[self.model.jnt_qposadr[self.model.joint(f"{body.name}/{name}").id]] = value
+            ctrl += servo
         self._robot_qpos = robot_qpos
         self._robot_ctrl = np.array(ctrl)
-        self._signatures = [_signature(o) for o in scene_json["objects"]]
 
     @staticmethod
-    def _robot_home(fragment: RobotFragment, body: Body) -> tuple[list[float], list[float]]:
+    def _robot_values(fragment: RobotFragment, body: Body) -> tuple[list[float], list[float]]:
         """The robot's qpos and ctrl in the home key, as numbers."""
         assert body.robot is not None
         qpos, ctrl = fragment.home(body.robot, dict(body.obj.joints))
         return [float(v) for v in qpos], [float(v) for v in ctrl]
 
-    def _write_body(self, body: Body) -> None:
-        """Mass properties, geoms, colours and camera of one object (its pose: `apply`)."""
+    def _write_body(self, k: int, body: Body, raw: Mapping[str, Any]) -> None:
+        """Mass properties, geoms, colours, images and camera of object `k` (its pose: `apply`)."""
         model = self.model
         obj = body.obj
+        self._image_names[k] = _image_name(raw)
+        self._signatures[k] = _signature(raw)
+        if body.light is not None:
+            light = model.light(obj.name).id
+            model.light_diffuse[light] = body.light.diffuse
+            model.light_cutoff[light] = body.light.cutoff
+            model.light_castshadow[light] = body.light.cast_shadow
+            return
         b = model.body(obj.name).id
         inertial = body.inertial
         model.body_mass[b] = inertial.mass
@@ -203,21 +315,38 @@ class SharedModel:
             g = model.geom(f"{obj.name}/{part.name}").id
             model.geom_pos[g] = part.position
             model.geom_quat[g] = part.quaternion
-            model.geom_rgba[g] = _geom_rgba(obj, part)
+            model.geom_rgba[g] = geom_rgba(obj, part)
             if part.shape == "mesh":
-                self._check_mesh_scale(obj.name, part.name, np.array(part.size))
+                self._check_mesh(obj, part)
                 continue
-            size = _geom_size(part)
+            if part.texture is not None:
+                model.geom_matid[g] = self._material(obj.label, part.texture)
+            size = geom_size(part)
             model.geom_size[g] = size
             rbound, half = _bounds(part.shape, size)
             model.geom_rbound[g] = rbound
             model.geom_aabb[g] = np.concatenate([np.zeros(3), half])
+        if any(p.texture is not None and p.shape != "mesh" for p in body.parts):
+            self._materials[(k, _image_name(raw))] = self._material(obj.label, next(
+                p.texture for p in body.parts if p.texture is not None and p.shape != "mesh"))
         if body.camera is not None:
             model.cam_fovy[model.camera(obj.name).id] = body.camera.fovy
 
-    def _check_mesh_scale(self, name: str, part: str, scale: np.ndarray) -> None:
-        """A mesh's scale is baked into its compiled vertices: it must not change."""
-        first = self._mesh_scales[(name, part)]
-        if not np.allclose(first, scale, rtol=0, atol=1e-12):
-            raise PrscError(f"object {name!r} is a mesh whose size changes between scenes ({first.tolist()} in the "
-                            f"model, {scale.tolist()} here); a shared model cannot rescale a mesh: compile each scene")
+    def _material(self, label: str, image: str) -> int:
+        """The material showing `image`, loaded when the model was built."""
+        material = self._image_material.get(image)
+        if material is None:
+            raise PrscError(f"object {label!r} shows an image ({Path(image).name}) that is not among those its "
+                            "spec can draw, which the shared model loaded; compile each scene")
+        return material
+
+    def _check_mesh(self, obj, part) -> None:
+        """A mesh's file and scale are baked into its compiled vertices: neither may change."""
+        label, mesh, scale = obj.label, part.mesh, np.array(part.size)
+        first_mesh, first_scale = self._meshes[(obj.name, part.name)]
+        if mesh != first_mesh:
+            raise PrscError(f"object {label!r} is another mesh ({mesh}) than in the model ({first_mesh}); "
+                            "a shared model cannot change a mesh: compile each scene")
+        if not np.allclose(first_scale, scale, rtol=0, atol=1e-12):
+            raise PrscError(f"object {label!r} is a mesh whose size changes between scenes ({first_scale.tolist()} in "
+                            f"the model, {scale.tolist()} here); a shared model cannot rescale a mesh: compile each scene")

@@ -19,7 +19,7 @@ import xml.etree.ElementTree as ET
 from functools import lru_cache
 from pathlib import Path
 
-from prsc.backends.bodies import Body, resolve_bodies
+from prsc.backends.bodies import Body, light_directions, resolve_bodies
 from prsc.backends.gazebo_camera import camera_sensor_body
 from prsc.backends.inertia import Inertial
 from prsc.backends.numbers import num, nums
@@ -173,8 +173,18 @@ def urdf_bundle(scene: Scene, folder: Path, store: AssetStore) -> dict[str, str]
     bodies = resolve_bodies(scene, store)
     files: dict[str, str] = {}
     entries = []
+    lights = []
     for body in bodies:
         obj = body.obj
+        if body.light is not None:
+            # URDF has no lights: the bundle's metadata holds them, for the loader's renderer.
+            lights.append({
+                "name": obj.name, "kind": body.light.kind, "position": list(obj.position),
+                "direction": light_directions(obj.quaternion)[0].tolist(), "color": list(body.light.color),
+                "intensity": body.light.intensity, "cutoff_degrees": body.light.cutoff,
+                "cast_shadow": body.light.cast_shadow,
+            })
+            continue
         filename = f"{obj.name}.urdf"
         files[filename] = _robot_urdf(body, store, folder) if body.robot else _text(_parts_urdf(body, folder))
         camera = None
@@ -214,6 +224,7 @@ def urdf_bundle(scene: Scene, folder: Path, store: AssetStore) -> dict[str, str]
         "gravity": [0.0, 0.0, -9.81],
         "ground": ground,
         "objects": entries,
+        "lights": lights,
     }
     files["scene.json"] = json.dumps(manifest, indent=1) + "\n"
     return files

@@ -293,6 +293,27 @@ def _joint_values(layer, path: str, body: Body) -> None:
             Sdf.AttributeSpec(spec, drive_attribute(joint), Sdf.ValueTypeNames.Float).default = value
 
 
+def _light(stage, body: Body) -> None:
+    """A light object: an Xform at its pose holding a UsdLux light turned to shine along the object's
+    +y (a UsdLux light shines along its -Z): a DistantLight, or a SphereLight shaped into a cone."""
+    from pxr import Gf, UsdGeom, UsdLux
+
+    light = body.light
+    assert light is not None
+    path = f"/World/{body.obj.name}"
+    _pose(UsdGeom.Xform.Define(stage, path), body.obj.position, body.obj.quaternion)
+    if light.kind == "directional":
+        lux = UsdLux.DistantLight.Define(stage, f"{path}/light")
+    else:
+        lux = UsdLux.SphereLight.Define(stage, f"{path}/light")
+        lux.CreateRadiusAttr(0.01)
+        UsdLux.ShapingAPI.Apply(lux.GetPrim()).CreateShapingConeAngleAttr(float(light.cutoff))
+    _pose(lux, (0.0, 0.0, 0.0), CAMERA_QUAT_NEG_Z)
+    lux.CreateColorAttr(Gf.Vec3f(*light.color))
+    lux.CreateIntensityAttr(float(light.intensity))
+    UsdLux.ShadowAPI.Apply(lux.GetPrim()).CreateShadowEnableAttr(bool(light.cast_shadow))
+
+
 def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:
     """The usda text of a scene's stage to be written at `path` (references relative to it)."""
     from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics
@@ -328,7 +349,9 @@ def usd_text(scene: Scene, path: Path, store: AssetStore) -> str:
         _color(plane, (0.8, 0.8, 0.78, 1.0))
         UsdPhysics.CollisionAPI.Apply(plane.GetPrim())
     for body in bodies:
-        if body.robot is not None:
+        if body.light is not None:
+            _light(stage, body)
+        elif body.robot is not None:
             _robot_mount(stage, body)
         else:
             _rigid_body(stage, body, folder, references)

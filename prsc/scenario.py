@@ -90,14 +90,28 @@ class Scenario:
         batches, vectorised over scenes, when the spec allows it (docs/sampling.md, "Batched sampling")."""
         return self.sampler.scenes(seed, indices, start)
 
+    def image_choices(self) -> dict[str, tuple[str, ...]]:
+        """Per object whose `texture` is a file name or a choice among file names, every name it can
+        draw (`prsc check` refuses any other texture; the shared model refuses an object it lacks)."""
+        from prsc.ir.mesh_sizes import constant_strings
+
+        choices = {}
+        for obj in self.sampler.program.objects:
+            texture = obj.prop("texture")
+            names = None if texture is None else constant_strings(texture)
+            if names is not None:
+                choices[obj.name] = names
+        return choices
+
     def model(self, seed: int = 0, index: int = 0) -> mujoco.MjModel:
-        """One MjModel whose structure fits every scene of the spec (built from scene `index` of `seed`)."""
+        """One MjModel whose structure fits every scene of the spec (built from scene `index` of `seed`),
+        with every image the spec can draw loaded once."""
         from prsc.backends.shared_model import SharedModel
         from prsc.backends.store import AssetStore
 
         scene = self.scene(seed, index)
         root = in_memory_root()
-        shared = SharedModel(scene, mujoco_model(scene), AssetStore(root / "assets"), root / "mjcf")
+        shared = SharedModel(scene, mujoco_spec(scene), AssetStore(root / "assets"), root / "mjcf", self.image_choices())
         self._shared[id(shared.model)] = shared
         return shared.model
 

@@ -8,7 +8,7 @@ functions and under TYPE_CHECKING: a type named across a layer is a dependency t
 - Backends (and the asset recipes they read) never import spec text's stages, the IR or
   prsc.commands: they read scene JSON and asset descriptions.
 - The MuJoCo runner (runner/) steps what the backends wrote; it reads scene JSON, never spec text.
-- The library API (prsc/scenario.py, prsc/scene_env.py) joins sampling, the backends and the
+- The library API (prsc/scenario.py, prsc/scene_env.py, prsc/scene_cameras.py) joins sampling, the backends and the
   runner; pipeline/ (executors, campaigns, output folders) serves the subcommands (commands/).
 - No import cycles between modules. Three were broken and stay forbidden by name:
   ir/constructors <-> ir/expressions, the engine <-> Gibbs object cycle, and `commands`
@@ -82,7 +82,7 @@ def _graph() -> dict[str, tuple[set[str], set[str]]]:
     return graph
 
 
-API = {"prsc.scenario", "prsc.scene_env"}  # the library API (prsc.load, SceneEnv): sampling + backends
+API = {"prsc.scenario", "prsc.scene_env", "prsc.scene_cameras"}  # the library API (prsc.load, SceneEnv and its camera views)
 
 
 def _layer(module: str) -> str:

@@ -5,8 +5,9 @@ shared MuJoCo model (`scenario.apply`) against a model compiled per scene
 Rows: drawing the scene alone; `apply` alone and a compile alone (scenes drawn
 beforehand); draw + apply (an RL reset) and draw + compile (the path without `apply`),
 from those rates; and a 4-environment
-`gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed.
-CPU time of this process, so other load on the machine does not count.
+`gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed, with
+a `SceneEnv.step` (no rendering) against the same `mujoco.mj_step` calls on its model, timed
+in alternating rounds. CPU time of this process, so other load on the machine does not count.
 """
 
 from __future__ import annotations
@@ -59,7 +60,34 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     envs.reset(seed=seed)
     rates[f"SyncVectorEnv x{VECTOR_ENVS} reset"] = VECTOR_ENVS * _rate(max(1, n // VECTOR_ENVS), lambda k: envs.reset())
     envs.close()
+    rates.update(bench_steps(SceneEnv(spec, include_dirs=include_dirs), seed, steps=10 * n))
     return rates
+
+
+def bench_steps(env, seed: int, steps: int, rounds: int = 10) -> dict[str, float]:
+    """Steps per CPU-second of `env.step` (no rendering) and of the same `mj_step(nstep=frame_skip)`
+    calls on its model and data from the same state, in alternating rounds so that load on the
+    machine falls on both; the ratio is the median of the rounds' ratios (one busy round does not
+    decide it)."""
+    import statistics
+
+    import mujoco
+    import numpy as np
+
+    env.reset(seed=seed)
+    action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+    model, data, skip = env.model, env.data, env.frame_skip
+    per_round = max(1, steps // rounds)
+    rates: dict[str, list[float]] = {"env": [], "mujoco": []}
+    for _ in range(rounds):
+        env.reset()
+        rates["env"].append(_rate(per_round, lambda k: env.step(action)))
+        env.reset()
+        data.ctrl[:] = np.clip(action, env.action_space.low, env.action_space.high)
+        rates["mujoco"].append(_rate(per_round, lambda k: mujoco.mj_step(model, data, nstep=skip)))
+    ratio = statistics.median(m / e for e, m in zip(rates["env"], rates["mujoco"]))
+    return {"SceneEnv.step": statistics.median(rates["env"]), f"mj_step(nstep={skip})": statistics.median(rates["mujoco"]),
+            "step cost ratio": ratio}
 
 
 def print_resets(spec: str, n: int, include_dirs: list[str]) -> None:
@@ -68,5 +96,8 @@ def print_resets(spec: str, n: int, include_dirs: list[str]) -> None:
     print(f"prsc reset benchmark: {spec}, {n} scenes, one core, load average {os.getloadavg()[0]:.2f}")
     print(f"  apply is {rates['apply (scene drawn)'] / rates['compile (scene drawn)']:,.0f}x a compile per scene; "
           f"a reset (draw + apply) {rates['draw + apply'] / rates['draw + compile']:,.1f}x")
+    ratio = rates.pop("step cost ratio", None)
+    if ratio is not None:
+        print(f"  a SceneEnv step costs {ratio:.3f}x the same mj_step calls (median of 10 rounds)")
     for name, rate in rates.items():
         print(f"  {name:<28} {rate:>9,.0f} per CPU-second")

@@ -1,19 +1,24 @@
 """One MuJoCo model per spec (`scenario.model()`), scenes written into it without
 recompiling (`scenario.apply`), and `prsc.SceneEnv`, a Gymnasium environment on top.
 
-- For 100 scenes each of Table-Cube and bin_picking (random part sizes), every array that
+- For 10 scenes each of Table-Cube and bin_picking (random part sizes), every array that
   a scene decides (body poses, geom sizes and bounds, masses, inertias, colours, the home
   key, what mj_setConst derives) equals a freshly compiled model's, and so do the body
   poses after mj_forward (<= 1e-9 m);
-- a scene the shared model cannot hold (another set of objects, another shape, a mesh of
-  another size, another image) is an error naming the object;
-- Gymnasium's own env checker passes, and Sync and Async vector environments run;
-- the example in examples/ runs as written.
+- a scene the shared model cannot hold (another set of objects, shape, ground or camera
+  resolution, a mesh of another size, an image the spec cannot draw) is an error naming it;
+- every image a spec's `texture` can draw is loaded once: 30 scenes show a fresh model's
+  image on each geom, and two scenes of each image render equal pixel for pixel;
+- Gymnasium's own env checker passes (also with camera observations), and Sync and Async
+  vector environments run; camera observations equal a fresh model's renderer's images;
+  actions are bounded (a URDF arm's by its joints); `max_episode_steps` truncates;
+- the examples in examples/ run as written.
 """
 
 from __future__ import annotations
 
 import copy
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -31,7 +36,21 @@ REPO = Path(__file__).resolve().parents[2]
 SCENES = 10  # equality is checked to 1e-9 per scene; 10 scenes cover every object and part size change
 DECIDED = ("body_pos", "body_quat", "body_mass", "body_ipos", "body_iquat", "body_inertia", "body_subtreemass",
            "body_invweight0", "dof_invweight0", "geom_size", "geom_pos", "geom_quat", "geom_rbound", "geom_aabb",
-           "geom_rgba", "cam_fovy", "qpos0", "key_qpos", "key_ctrl")
+           "geom_rgba", "cam_fovy", "qpos0", "qpos_spring", "key_qpos", "key_ctrl")
+
+
+def _at_home(model):
+    """New data of a model at its `home` key, forwarded (what `apply` leaves)."""
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+    mujoco.mj_forward(model, data)
+    return data
+
+
+def _fresh_at_home(scene):
+    """A freshly compiled model of a scene and its data at `home`."""
+    fresh = prsc.mujoco_model(scene)
+    return fresh, _at_home(fresh)
 
 
 @pytest.mark.parametrize("spec", ["table_cube", "bin_picking"])
@@ -45,12 +64,11 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
     for index in range(1, SCENES + 1):
         scene = scenario.scene(0, index)
         scenario.apply(scene, model, data)
-        fresh = prsc.mujoco_model(scene)
-        fresh_data = mujoco.MjData(fresh)
-        mujoco.mj_resetDataKeyframe(fresh, fresh_data, fresh.key("home").id)
-        mujoco.mj_forward(fresh, fresh_data)
+        fresh, fresh_data = _fresh_at_home(scene)
         for name in DECIDED:
             worst[name] = max(worst[name], float(np.max(np.abs(getattr(model, name) - getattr(fresh, name)), initial=0)))
+        worst["stat"] = max(worst.get("stat", 0.0), float(np.max(np.abs(model.stat.center - fresh.stat.center))),
+                            abs(model.stat.extent - fresh.stat.extent))
         worst["xpos"] = max(worst["xpos"], float(np.max(np.abs(data.xpos - fresh_data.xpos))))
         worst["xquat"] = max(worst["xquat"], float(np.max(np.abs(data.xquat - fresh_data.xquat))))
         sizes.add(model.geom_size.tobytes())
@@ -59,7 +77,7 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
         assert len(sizes) == SCENES  # the parts' sizes really changed from scene to scene
 
 
-def test_a_scene_the_model_cannot_hold_is_an_error_naming_the_object():
+def test_a_scene_the_model_cannot_hold_is_an_error_naming_what_differs():
     scenario = prsc.load(REPO / "specs" / "table_cube.prs")
     model = scenario.model()
     data = mujoco.MjData(model)
@@ -72,7 +90,16 @@ def test_a_scene_the_model_cannot_hold_is_an_error_naming_the_object():
     next(o for o in other["objects"] if o["name"] == "c1")["model"] = "cylinder"
     with pytest.raises(PrscError, match="object 'c1' has other parts or shapes"):
         scenario.apply(other, model, data)
+    bare = copy.deepcopy(scene)
+    bare["params"]["ground"] = False
+    with pytest.raises(PrscError, match="it has no ground plane, the model has"):
+        scenario.apply(bare, model, data)
+    wide = copy.deepcopy(scene)
+    next(o for o in wide["objects"] if o["name"] == "camera")["camera"]["resolution"] = [320, 240]
+    with pytest.raises(PrscError, match=r"camera 'camera' has the resolution \(320, 240\) here, \(640, 480\)"):
+        scenario.apply(wide, model, data)
     scenario.apply(scene, model, data)  # still fine after a refusal
+    assert np.allclose(data.body("c1").xpos, next(o for o in scene["objects"] if o["name"] == "c1")["position"])
     with pytest.raises(PrscError, match="a model this scenario built"):
         scenario.apply(scene, prsc.mujoco_model(scene), data)
 
@@ -86,29 +113,87 @@ def test_a_mesh_whose_size_changes_is_refused():
             scenario.apply(scenario.scene(0, index), model, data)
 
 
-def test_a_texture_that_changes_is_refused_and_a_kept_one_shows_white(tmp_path):
+def _textured_table_cube(folder: Path) -> Path:
+    """Table-Cube whose cube shows one of three images per scene."""
     from PIL import Image
 
-    for name, colour in (("red.png", (200, 0, 0)), ("green.png", (0, 200, 0))):
-        Image.fromarray(np.full((8, 8, 3), colour, np.uint8)).save(tmp_path / name)
-    (tmp_path / "crates.prs").write_text(
-        'from tabletop import *\nt = Table on Vector3D(0, 0, 0), with width 1.2, with length 0.8, with height 0.75\n'
-        'crate = Cube completely on t, with texture Options(["red.png", "green.png"])\n')
-    scenario = prsc.load(tmp_path / "crates.prs")
-    model = scenario.model(0, 0)
+    rng = np.random.default_rng(0)
+    for name in ("wood", "marble", "checker"):
+        Image.fromarray(rng.integers(0, 255, (16, 16, 3), dtype=np.uint8)).save(folder / f"{name}.png")
+    text = (REPO / "specs" / "table_cube.prs").read_text().replace(
+        'c1 = Cube completely on tr_1, with color "red"',
+        'c1 = Cube completely on tr_1, with texture Options(["wood.png", "marble.png", "checker.png"])')
+    assert "with texture" in text
+    (folder / "textured.prs").write_text(text)
+    return folder / "textured.prs"
+
+
+def _image_of(model, geom: int) -> bytes:
+    """The pixels of the RGB texture a geom's material shows."""
+    texture = model.mat_texid[model.geom_matid[geom], int(mujoco.mjtTextureRole.mjTEXROLE_RGB)]
+    size = model.tex_width[texture] * model.tex_height[texture] * model.tex_nchannel[texture]
+    return model.tex_data[model.tex_adr[texture]:model.tex_adr[texture] + size].tobytes()
+
+
+def _close_up(renderer, model, data, body: str) -> np.ndarray:
+    """An image of a body filling the view (MuJoCo's free camera aimed at it)."""
+    camera = mujoco.MjvCamera()
+    camera.lookat[:] = data.body(body).xpos
+    camera.distance, camera.azimuth, camera.elevation = 0.12, 60.0, -35.0
+    renderer.update_scene(data, camera)
+    return renderer.render().copy()
+
+
+def test_every_image_is_loaded_once_and_apply_shows_the_scenes(tmp_path):
+    # 30 scenes: the image each geom shows equals a fresh model's; two scenes of each image also render equal.
+    scenario = prsc.load(_textured_table_cube(tmp_path))
+    model = scenario.model()
     data = mujoco.MjData(model)
-    texture = lambda scene: next(o for o in scene["objects"] if o["name"] == "crate")["properties"]["texture"]
-    scenes = [scenario.scene(0, index) for index in range(12)]  # the model's own scene first
-    first = texture(scenes[0])
-    same = [s for s in scenes if texture(s) == first]
-    other = [s for s in scenes if texture(s) != first]
-    assert len(same) >= 2 and other  # both images are drawn in 12 scenes
-    for scene in same:
+    geom = model.geom("c1/box").id
+    shown: dict[str, list[bytes]] = {}
+    for index in range(1, 31):
+        scene = scenario.scene(0, index)
         scenario.apply(scene, model, data)
         fresh = prsc.mujoco_model(scene)
-        assert np.array_equal(model.geom_rgba, fresh.geom_rgba)  # the textured box is white, as compiled
-    with pytest.raises(PrscError, match=f"object 'crate' shows another image .*{texture(other[0])[:-4]}"):
-        scenario.apply(other[0], model, data)
+        assert _image_of(model, geom) == _image_of(fresh, fresh.geom("c1/box").id)
+        image = next(o for o in scene["objects"] if o["name"] == "c1")["properties"]["texture"]
+        if len(shown.setdefault(image, [])) == 2:
+            continue
+        fresh_data = _at_home(fresh)
+        with mujoco.Renderer(fresh, 48, 64) as renderer:
+            expected = _close_up(renderer, fresh, fresh_data, "c1")
+        with mujoco.Renderer(model, 48, 64) as renderer:
+            seen = _close_up(renderer, model, data, "c1")
+        assert np.array_equal(seen, expected)
+        shown[image].append(seen.tobytes())
+    assert sorted(shown) == ["checker.png", "marble.png", "wood.png"]
+    assert len({views[0] for views in shown.values()}) == 3  # each image looks different
+
+
+def test_a_model_whose_images_cannot_be_listed_is_refused_when_built(tmp_path):
+    # `prsc check` refuses a texture that is not a file name or a choice among them; a shared
+    # model told no list for a textured object refuses to be built, not at a later reset.
+    from prsc.backends.shared_model import SharedModel
+    from prsc.backends.store import AssetStore
+    from prsc.scenario import in_memory_root
+
+    scene = prsc.load(_textured_table_cube(tmp_path)).scene(0, 0)
+    root = in_memory_root()
+    with pytest.raises(PrscError, match="object 'c1': its image .* is not drawn from a list of file names"):
+        SharedModel(scene, prsc.mujoco_spec(scene), AssetStore(root / "assets"), root / "mjcf", images={})
+
+
+def test_an_image_the_model_did_not_load_is_refused(tmp_path):
+    scenario = prsc.load(_textured_table_cube(tmp_path))
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    scene = copy.deepcopy(scenario.scene(0, 1))
+    from PIL import Image
+
+    Image.fromarray(np.zeros((4, 4, 3), np.uint8)).save(tmp_path / "other.png")
+    next(o for o in scene["objects"] if o["name"] == "c1")["properties"]["texture"] = "other.png"
+    with pytest.raises(PrscError, match="object 'c1' shows an image \\(other-.*\\) that is not among"):
+        scenario.apply(scene, model, data)
 
 
 gymnasium = pytest.importorskip("gymnasium")
@@ -161,5 +246,71 @@ def test_bench_resets_prints_each_way(capsys):
 
     assert main(["bench", "--resets", str(REPO / "specs" / "table_cube.prs"), "-n", "10"]) == 0
     out = capsys.readouterr().out
-    for row in ("apply (scene drawn)", "compile (scene drawn)", "draw + apply", "SyncVectorEnv x4 reset"):
+    for row in ("apply (scene drawn)", "compile (scene drawn)", "draw + apply", "SyncVectorEnv x4 reset", "SceneEnv.step",
+                "mj_step(nstep=10)", "a SceneEnv step costs"):
         assert row in out
+
+
+def test_camera_observations_are_the_spec_cameras_images():
+    from gymnasium.utils.env_checker import check_env
+
+    spec = REPO / "specs" / "table_cube.prs"
+    env = prsc.SceneEnv(spec, observation={"camera": ("rgb", "depth", "segmentation")})
+    assert set(env.observation_space["camera"].spaces) == {"rgb", "depth", "segmentation"}
+    assert env.observation_space["camera"]["rgb"].shape == (480, 640, 3)
+    for seed in (3, 4):  # one renderer for both scenes: the second is drawn after a reset
+        observation, info = env.reset(seed=seed)
+        fresh, fresh_data = _fresh_at_home(info["scene"])
+        with mujoco.Renderer(fresh, 480, 640) as renderer:
+            renderer.update_scene(fresh_data, "camera")
+            expected = renderer.render()
+        assert observation["camera"]["rgb"].std() > 1.0
+        assert np.array_equal(observation["camera"]["rgb"], expected)
+        assert env.observation_space.contains(observation)
+    env.close()
+    env = prsc.SceneEnv(spec, observation="cameras", render_mode="rgb_array", render_camera="camera", width=64, height=48)
+    check_env(env, skip_render_check=False)
+    assert env.render().shape == (48, 64, 3)
+    env.close()
+    with pytest.raises(ValueError, match="no camera 'ceiling' in this spec"):
+        prsc.SceneEnv(spec, observation={"ceiling": "rgb"})
+
+
+def test_steps_give_no_scene_and_truncate_at_max_episode_steps():
+    env = prsc.SceneEnv(REPO / "specs" / "table_cube.prs", max_episode_steps=3)
+    _, info = env.reset(seed=0)
+    assert info["scene"]["index"] == 0
+    outcomes = [env.step(env.action_space.sample()) for _ in range(3)]
+    assert [truncated for *_, truncated, _ in outcomes] == [False, False, True]
+    assert all(info == {} for *_, info in outcomes)
+    env.reset()
+    assert not env.step(env.action_space.sample())[3]  # the count starts again
+
+
+def test_a_urdf_arm_s_actions_are_bounded_by_its_joint_limits():
+    import pybullet_data
+
+    env = prsc.SceneEnv(REPO / "specs" / "pybullet_arm" / "franka_pick.prs", include_dirs=[pybullet_data.getDataPath()])
+    model = env.model
+    joints = model.actuator_trnid[:, 0]
+    assert model.nu == 9 and np.all(np.isfinite(env.action_space.low)) and np.all(np.isfinite(env.action_space.high))
+    assert np.allclose(env.action_space.low, model.jnt_range[joints, 0], atol=1e-6)
+    assert np.allclose(env.action_space.high, model.jnt_range[joints, 1], atol=1e-6)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    for _ in range(50):
+        env.step(env.action_space.sample())
+        targets = env.data.ctrl
+        assert np.all(targets >= model.jnt_range[joints, 0]) and np.all(targets <= model.jnt_range[joints, 1])
+    env.step(np.full(model.nu, 100.0))  # beyond the space: clipped to it
+    assert np.array_equal(env.data.ctrl, model.jnt_range[joints, 1])
+
+
+def test_the_domain_randomisation_example_runs_as_written(tmp_path):
+    # A fresh shell: no MUJOCO_GL, so SceneEnv picks a headless backend itself.
+    shell = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    done = subprocess.run([sys.executable, str(REPO / "examples" / "domain_randomisation.py"), "--episodes", "4",
+                           "--steps", "2"], capture_output=True, text=True, cwd=tmp_path, timeout=300, env=shell)
+    assert done.returncode == 0, done.stderr
+    assert "4 distinct first images of 4 episodes" in done.stdout
+    assert (tmp_path / "domain_randomisation.png").is_file()
