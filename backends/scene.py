@@ -27,7 +27,7 @@ LIGHT_KINDS = ("directional", "spot")
 
 @dataclass(frozen=True)
 class LightSpec:
-    """A light object (LANGUAGE.md §6): it shines along its local +y from its position."""
+    """A light object: it shines along its local +y from its position."""
 
     kind: str  # "directional" | "spot"
     color: tuple[float, float, float]  # the object's colour (RGB)

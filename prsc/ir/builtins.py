@@ -39,7 +39,7 @@ PROPERTY_TYPES: dict[str, frozenset[Type]] = {
     "camera": frozenset({Type.BOOL}),
     "fovy": frozenset({Type.SCALAR}),
     "resolution": frozenset({Type.LIST}),
-    "light": frozenset({Type.BOOL}),  # a light, not a body (LANGUAGE.md §6)
+    "light": frozenset({Type.BOOL}),  # a light, not a body
     "kind": frozenset({Type.STRING}),  # a light's: "directional" or "spot"
     "intensity": frozenset({Type.SCALAR}),  # a light's colour is multiplied by it
     "cutoff": frozenset({Type.SCALAR}),  # a spot light's half angle of its cone (degrees)
