@@ -1,0 +1,195 @@
+"""One evaluator of task expressions on a world state: each predicate's truth and robustness in
+metres, the signed distance to where its truth changes (LANGUAGE.md section 8, docs/tasks.md)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from prsc.task.regions import box_corners, box_region, polygon_signed_distance, prism_signed_distance
+from prsc.task.terms import DIRECTIONS, Task, TaskObject, Term
+from prsc.task.world import Pose, WorldState
+
+REST_SPEED = 0.005  # m/s: `at rest` below this linear speed
+REST_ANGULAR = 0.05  # rad/s: and below this angular speed
+UPRIGHT_ANGLE = math.radians(10.0)  # `upright`: its up axis within this of world z
+ON_GAP = 0.01  # m: `on` rests on the surface within this
+
+
+@dataclass(frozen=True)
+class Truth:
+    """A predicate's value: whether it holds, and its robustness (positive where it holds)."""
+
+    holds: bool
+    robustness: float
+
+
+def support_along(obj: TaskObject, pose: Pose, n: np.ndarray) -> float:
+    """s(n): the box's half-thickness along unit n (LANGUAGE.md section 4)."""
+    return float(np.sum(np.asarray(obj.dimensions) / 2 * np.abs(pose.rotation.T @ n)))
+
+
+def _local(pose: Pose, points: np.ndarray) -> np.ndarray:
+    return (points - pose.position) @ pose.rotation
+
+
+class Evaluator:
+    """Evaluates the terms of one compiled task on world states."""
+
+    def __init__(self, task: Task):
+        self.task = task
+        self.objects = {o.name: o for o in task.objects}
+        self._corners = {o.name: box_corners(o.dimensions) for o in task.objects}
+
+    # ------------------------------------------------------------ values
+
+    def value(self, term: Term, world: WorldState):
+        """A term's value: Truth for a predicate, else a float or a vector (numpy, 3)."""
+        op = term.op
+        if term.is_predicate:
+            return self.truth(term, world)
+        if op == "const":
+            return float(term.value)  # type: ignore[arg-type]
+        if op == "vector":
+            return np.array([self._number(a, world) for a in term.args])
+        if op == "object":
+            return world.poses[term.name].position  # type: ignore[index]
+        if op == "attr":
+            return self._attribute(term, world)
+        if op == "neg":
+            return -self.value(term.args[0], world)
+        if op == "arith":
+            left, right = (self.value(a, world) for a in term.args)
+            return {"+": lambda: left + right, "-": lambda: left - right, "*": lambda: left * right,
+                    "/": lambda: left / right}[term.name]()  # type: ignore[index]
+        if op == "distance":
+            a, b = (self._point(t, world) for t in term.args)
+            return float(np.linalg.norm(a - b))
+        raise ValueError(f"unknown task term {op!r}")
+
+    def _number(self, term: Term, world: WorldState) -> float:
+        value = self.value(term, world)
+        return float(value.robustness if isinstance(value, Truth) else value)
+
+    def _point(self, term: Term, world: WorldState) -> np.ndarray:
+        if term.op == "object":
+            return world.poses[term.name].position  # type: ignore[index]
+        return np.asarray(self.value(term, world), dtype=float)
+
+    def _attribute(self, term: Term, world: WorldState):
+        target = term.args[0]
+        name = term.name
+        if target.op == "object":
+            obj, pose = self.objects[target.name], world.poses[target.name]  # type: ignore[index]
+            if name == "position":
+                return pose.position
+            if name == "speed":
+                return float(np.linalg.norm(pose.linear))
+            if name in ("width", "length", "height"):
+                return obj.dimensions[("width", "length", "height").index(name)]
+            vector = pose.position
+        else:
+            vector = self.value(target, world)
+        return float(vector["xyz".index(name)])  # type: ignore[index, operator]
+
+    # ------------------------------------------------------------ predicates
+
+    def truth(self, term: Term, world: WorldState) -> Truth:
+        """A predicate's truth and robustness."""
+        op = term.op
+        if op == "true":
+            return Truth(True, math.inf)
+        if op == "and":
+            parts = [self.truth(a, world) for a in term.args]
+            return Truth(all(p.holds for p in parts), min(p.robustness for p in parts))
+        if op == "or":
+            parts = [self.truth(a, world) for a in term.args]
+            return Truth(any(p.holds for p in parts), max(p.robustness for p in parts))
+        if op == "not":
+            inner = self.truth(term.args[0], world)
+            return Truth(not inner.holds, -inner.robustness)
+        if op == "compare":
+            return _compare(term.name, self._number(term.args[0], world), self._number(term.args[1], world))  # type: ignore[arg-type]
+        rho = self.robustness(term, world)
+        return Truth(rho >= 0.0, rho)
+
+    def robustness(self, term: Term, world: WorldState) -> float:
+        """The robustness of a relation or state word (it holds where it is >= 0)."""
+        op = term.op
+        name = term.args[0].name
+        obj, pose = self.objects[name], world.poses[name]  # type: ignore[index]
+        if op in ("in", "on"):
+            target = term.args[1].name
+            return self._containment(op, term.completely, obj, pose, self.objects[target], world.poses[target],  # type: ignore[index]
+                                     world, name, target)  # type: ignore[arg-type]
+        if op in DIRECTIONS:
+            other = world.poses[term.args[1].name]  # type: ignore[index]
+            by = self._number(term.args[2], world) if len(term.args) > 2 else 0.0
+            n = other.rotation @ np.asarray(DIRECTIONS[op])
+            return float(n @ (pose.position - other.position)) - by - support_along(obj, pose, n)
+        if op == "touches":
+            return -world.distance(name, term.args[1].name)  # type: ignore[arg-type]
+        if op == "at_rest":
+            radius = float(np.linalg.norm(obj.dimensions)) / 2
+            return min(REST_SPEED - float(np.linalg.norm(pose.linear)),
+                       radius * (REST_ANGULAR - float(np.linalg.norm(pose.angular))))
+        if op == "upright":
+            return UPRIGHT_ANGLE - math.acos(min(1.0, max(-1.0, float(pose.rotation[2, 2]))))
+        if op == "holds":
+            return self._holds(obj, term.args[1].name, world)  # type: ignore[arg-type]
+        if op == "visible":
+            camera = term.args[1].name
+            return self._visible(obj, pose, self.objects[camera], world.poses[camera])  # type: ignore[index]
+        raise ValueError(f"unknown task relation {op!r}")
+
+    def _containment(self, op: str, completely: bool, obj: TaskObject, pose: Pose, target: TaskObject,
+                     target_pose: Pose, world: WorldState, name: str, target_name: str) -> float:
+        points = (pose.position + self._corners[obj.name] @ pose.rotation.T) if completely else pose.position[None]
+        local = _local(target_pose, points)
+        if op == "in" and not target.container:
+            return float(prism_signed_distance(box_region(target.dimensions), local).min())
+        surface = target.support
+        up = target_pose.rotation[:, 2]
+        gap = float(up @ (pose.position - target_pose.position)) - surface.high - support_along(obj, pose, up)
+        over = float(polygon_signed_distance(surface, local[:, :2]).min())
+        return min(ON_GAP - abs(gap), over, -world.distance(name, target_name))
+
+    def _holds(self, robot: TaskObject, held: str, world: WorldState) -> float:
+        if len(robot.fingers) < 2:
+            raise ValueError(f"{robot.name} has no gripper with two finger links")
+        grip = [-world.distance(f"{robot.name}/{finger}", held) for finger in robot.fingers]
+        first, second = sorted(grip, reverse=True)[:2]
+        apart = [world.distance(held, other) for other in self.objects
+                 if other not in (robot.name, held) and self.objects[other].camera is None]
+        return min([first, second] + apart)
+
+    def _visible(self, obj: TaskObject, pose: Pose, camera: TaskObject, camera_pose: Pose) -> float:
+        fovy, aspect = camera.camera  # type: ignore[misc]
+        tan_y = math.tan(math.radians(fovy) / 2)
+        tan_x = tan_y * aspect
+        corners = _local(camera_pose, pose.position + self._corners[obj.name] @ pose.rotation.T)
+        x, y, z = corners[:, 0], corners[:, 1], corners[:, 2]  # the camera looks along its +y, up +z
+        margins = np.stack([(tan_x * y - x) / math.hypot(1, tan_x), (tan_x * y + x) / math.hypot(1, tan_x),
+                            (tan_y * y - z) / math.hypot(1, tan_y), (tan_y * y + z) / math.hypot(1, tan_y), y])
+        return float(margins.min())
+
+
+def _compare(op: str, a: float, b: float) -> Truth:
+    if op in ("<", "<="):
+        return Truth(a < b if op == "<" else a <= b, b - a)
+    if op in (">", ">="):
+        return Truth(a > b if op == ">" else a >= b, a - b)
+    if op == "==":
+        return Truth(a == b, -abs(a - b))
+    return Truth(a != b, abs(a - b))
+
+
+def json_value(value) -> object:
+    """A term's value as JSON data (a record): a bool, a number or a list."""
+    if isinstance(value, Truth):
+        return value.holds
+    if isinstance(value, np.ndarray):
+        return [float(v) for v in value]
+    return float(value)
