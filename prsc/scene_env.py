@@ -10,7 +10,11 @@ written into one MuJoCo model without recompiling (docs/learning.md). Needs the 
   (scene, model, data), 0 and False when not given;
 - `render()` draws the scene with `mujoco.Renderer` (render_mode "rgb_array"; headless: with
   MUJOCO_GL unset, the first of EGL and OSMesa that works, chosen before mujoco is imported);
-- `info["scene"]` is the scene JSON of the episode.
+- `info["scene"]` is the scene JSON of the episode;
+- with a task in the spec (LANGUAGE.md section 8, docs/tasks.md): `terminated` when the goal is
+  reached or a failure holds, `truncated` at `terminate after`, `info["is_success"]` and
+  `info["task"]` (status and each statement's robustness), reward 1 on success (`reward="sparse"`,
+  the default) or the goal's robustness (`reward="dense"`); user functions still override.
 """
 
 from __future__ import annotations
@@ -38,7 +42,7 @@ class SceneEnv(gymnasium.Env):
         frame_skip: int = 10,
         observation: SceneFunction | None = None,
         observation_space: spaces.Space | None = None,
-        reward: SceneFunction | None = None,
+        reward: SceneFunction | str | None = None,
         terminated: SceneFunction | None = None,
         render_mode: str | None = None,
         width: int = 640,
@@ -51,6 +55,7 @@ class SceneEnv(gymnasium.Env):
             choose_gl_backend()  # headless rendering: MuJoCo reads MUJOCO_GL when first imported
         import mujoco
 
+        from prsc.runner.task_steps import TaskSteps
         from prsc.scenario import load
 
         if frame_skip < 1:
@@ -65,8 +70,11 @@ class SceneEnv(gymnasium.Env):
         self.frame_skip = frame_skip
         self.render_mode = render_mode
         self._observe = observation
-        self._reward = reward
+        self._reward = reward if callable(reward) else None
         self._terminated = terminated
+        if isinstance(reward, str) and not self.scenario.program.task:
+            raise ValueError(f"reward={reward!r} reads the spec's task, and {spec} states none (docs/tasks.md)")
+        self._task = TaskSteps(reward if isinstance(reward, str) else "sparse") if self.scenario.program.task else None
         self._size = (height, width)
         self._renderer = None
         self._seed = 0
@@ -92,7 +100,8 @@ class SceneEnv(gymnasium.Env):
         self.scene = self.scenario.scene(self._seed, self._next_index)
         self._next_index += 1
         self.scenario.apply(self.scene, self.model, self.data)
-        return self._observation(), {"scene": copy.deepcopy(self.scene)}
+        info = self._task.reset(self.scene, self.model, self.data) if self._task else {}
+        return self._observation(), {"scene": copy.deepcopy(self.scene), **info}
 
     def step(self, action):
         """Set the controls and step MuJoCo `frame_skip` times."""
@@ -100,10 +109,12 @@ class SceneEnv(gymnasium.Env):
 
         self.data.ctrl[:] = np.asarray(action, dtype=np.float64)
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-        reward = float(self._reward(self.scene, self.model, self.data)) if self._reward else 0.0
-        done = bool(self._terminated(self.scene, self.model, self.data)) if self._terminated else False
+        task = self._task.step(self.model, self.data) if self._task else None
+        reward = float(self._reward(self.scene, self.model, self.data)) if self._reward else task.reward if task else 0.0
+        done = bool(self._terminated(self.scene, self.model, self.data)) if self._terminated else bool(task and task.terminated)
         # A copy per call: a caller may keep or edit what it was given (Gymnasium's rule).
-        return self._observation(), reward, done, False, {"scene": copy.deepcopy(self.scene)}
+        info = {"scene": copy.deepcopy(self.scene), **(task.info if task else {})}
+        return self._observation(), reward, done, bool(task and task.truncated), info
 
     def render(self):
         """The scene from MuJoCo's free camera as an RGB array (render_mode "rgb_array")."""
