@@ -62,6 +62,30 @@ class MjWorld:
                     self.geoms[f"{obj['name']}/{finger}"] = np.array(
                         [g for g in range(model.ngeom) if collides[g] and model.geom_bodyid[g] == link], dtype=int)
         self._fromto = np.zeros(6)
+        self._boxes_at: tuple | None = None
+        self._boxes: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 3)), np.zeros((0, 3)))
+        self._object_cache: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._nearest: dict[tuple[str, str], tuple[int, int]] = {}  # each pair's nearest geoms at the last step
+
+    def _object_boxes(self, data: mujoco.MjData, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(lows, highs) of the world-aligned bounding boxes of an object's geoms (from MuJoCo's own
+        geom_aabb) and the box around them all, computed once per state (a state set and forwarded
+        without stepping is a new one)."""
+        key = (data._address, data.time, data.geom_xpos.tobytes(), data.geom_xmat.tobytes())
+        if self._boxes_at != key:
+            rotations = data.geom_xmat.reshape(-1, 3, 3)
+            aabb = self.model.geom_aabb
+            centres = data.geom_xpos + np.einsum("nij,nj->ni", rotations, aabb[:, :3])
+            halves = np.einsum("nij,nj->ni", np.abs(rotations), aabb[:, 3:])
+            self._boxes = (centres - halves, centres + halves)
+            self._boxes_at = key
+            self._object_cache = {}
+        found = self._object_cache.get(name)
+        if found is None:
+            geoms = self.geoms[name]
+            low, high = self._boxes[0][geoms], self._boxes[1][geoms]
+            found = self._object_cache[name] = (low, high, np.stack([low.min(axis=0), high.max(axis=0)]))
+        return found
 
     def pose(self, data: mujoco.MjData, name: str, dims) -> Pose:
         """The object's box centre and rotation now (the body frame is the box's, prsc/backends)."""
@@ -75,18 +99,28 @@ class MjWorld:
         ga, gb = self.geoms.get(a), self.geoms.get(b)
         if ga is None or gb is None or not len(ga) or not len(gb):
             return DISTANCE_CAP
-        centres_a, centres_b = data.geom_xpos[ga], data.geom_xpos[gb]
-        lower = (np.linalg.norm(centres_a[:, None] - centres_b[None], axis=2)
-                 - self.model.geom_rbound[ga][:, None] - self.model.geom_rbound[gb][None])
-        best = DISTANCE_CAP
-        order = np.argsort(lower, axis=None)
-        flat = lower.ravel()
-        for k in order:
-            if flat[k] >= best:
+        best, nearest = DISTANCE_CAP, self._nearest.get((a, b))
+        if nearest is not None:  # the pair nearest at the last step bounds this one's search (steps are short)
+            best = min(best, mujoco.mj_geomDistance(self.model, data, nearest[0], nearest[1], best, self._fromto))
+        # Broad phase: the distance between the geoms' world-aligned bounding boxes bounds theirs below,
+        # first the objects' (one box around all their geoms), then each pair's.
+        (low_a, high_a, box_a), (low_b, high_b, box_b) = self._object_boxes(data, a), self._object_boxes(data, b)
+        gap = np.maximum(np.maximum(box_b[0] - box_a[1], box_a[0] - box_b[1]), 0.0)
+        if float(gap @ gap) >= best * best:
+            return float(best)
+        gaps = np.maximum(np.maximum(low_b[None] - high_a[:, None], low_a[:, None] - high_b[None]), 0.0)
+        lower = np.sqrt(np.einsum("ijd,ijd->ij", gaps, gaps)).ravel()
+        candidates = np.flatnonzero(lower < best)
+        width, ids_a, ids_b = len(gb), ga.tolist(), gb.tolist()
+        for k, bound in sorted(zip(candidates.tolist(), lower[candidates].tolist()), key=lambda item: item[1]):
+            if bound >= best:
                 break
-            i, j = divmod(int(k), len(gb))
-            d = mujoco.mj_geomDistance(self.model, data, int(ga[i]), int(gb[j]), best, self._fromto)
-            best = min(best, d)
+            pair = (ids_a[k // width], ids_b[k % width])
+            if pair == nearest:
+                continue
+            d = mujoco.mj_geomDistance(self.model, data, pair[0], pair[1], best, self._fromto)
+            if d < best:
+                best, self._nearest[(a, b)] = d, pair
         return float(best)
 
 

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from prsc.task.regions import box_corners, box_region, polygon_signed_distance, prism_signed_distance
+from prsc.task.regions import (box_corners, box_region, point_polygon_distance, polygon_signed_distance,
+                               prepared_polygon, prism_signed_distance)
 from prsc.task.terms import DIRECTIONS, Task, TaskObject, Term
 from prsc.task.world import Pose, WorldState
 
@@ -26,9 +27,14 @@ class Truth:
     robustness: float
 
 
-def support_along(obj: TaskObject, pose: Pose, n: np.ndarray) -> float:
-    """s(n): the box's half-thickness along unit n (LANGUAGE.md section 4)."""
-    return float(np.sum(np.asarray(obj.dimensions) / 2 * np.abs(pose.rotation.T @ n)))
+def support_along(half: np.ndarray, pose: Pose, n: np.ndarray) -> float:
+    """s(n): the box's half-thickness (half extents `half`) along unit n (LANGUAGE.md section 4)."""
+    return float(half @ np.abs(pose.rotation.T @ n))
+
+
+def _norm(v: np.ndarray) -> float:
+    x, y, z = v.tolist()
+    return math.sqrt(x * x + y * y + z * z)
 
 
 def _local(pose: Pose, points: np.ndarray) -> np.ndarray:
@@ -42,6 +48,9 @@ class Evaluator:
         self.task = task
         self.objects = {o.name: o for o in task.objects}
         self._corners = {o.name: box_corners(o.dimensions) for o in task.objects}
+        self._half = {o.name: np.asarray(o.dimensions, dtype=float) / 2 for o in task.objects}
+        self._boxes = {o.name: box_region(o.dimensions) for o in task.objects}
+        self._supports = {o.name: prepared_polygon(o.support) for o in task.objects}
 
     # ------------------------------------------------------------ values
 
@@ -66,7 +75,7 @@ class Evaluator:
                     "/": lambda: left / right}[term.name]()  # type: ignore[index]
         if op == "distance":
             a, b = (self._point(t, world) for t in term.args)
-            return float(np.linalg.norm(a - b))
+            return _norm(a - b)
         raise ValueError(f"unknown task term {op!r}")
 
     def _number(self, term: Term, world: WorldState) -> float:
@@ -86,7 +95,7 @@ class Evaluator:
             if name == "position":
                 return pose.position
             if name == "speed":
-                return float(np.linalg.norm(pose.linear))
+                return _norm(pose.linear)
             if name in ("width", "length", "height"):
                 return obj.dimensions[("width", "length", "height").index(name)]
             vector = pose.position
@@ -128,13 +137,12 @@ class Evaluator:
             other = world.poses[term.args[1].name]  # type: ignore[index]
             by = self._number(term.args[2], world) if len(term.args) > 2 else 0.0
             n = other.rotation @ np.asarray(DIRECTIONS[op])
-            return float(n @ (pose.position - other.position)) - by - support_along(obj, pose, n)
+            return float(n @ (pose.position - other.position)) - by - support_along(self._half[name], pose, n)
         if op == "touches":
             return -world.distance(name, term.args[1].name)  # type: ignore[arg-type]
         if op == "at_rest":
-            radius = float(np.linalg.norm(obj.dimensions)) / 2
-            return min(REST_SPEED - float(np.linalg.norm(pose.linear)),
-                       radius * (REST_ANGULAR - float(np.linalg.norm(pose.angular))))
+            radius = _norm(self._half[name])
+            return min(REST_SPEED - _norm(pose.linear), radius * (REST_ANGULAR - _norm(pose.angular)))
         if op == "upright":
             return UPRIGHT_ANGLE - math.acos(min(1.0, max(-1.0, float(pose.rotation[2, 2]))))
         if op == "holds":
@@ -149,11 +157,14 @@ class Evaluator:
         points = (pose.position + self._corners[obj.name] @ pose.rotation.T) if completely else pose.position[None]
         local = _local(target_pose, points)
         if op == "in" and not target.container:
-            return float(prism_signed_distance(box_region(target.dimensions), local).min())
+            return float(prism_signed_distance(self._boxes[target.name], local).min())
         surface = target.support
         up = target_pose.rotation[:, 2]
-        gap = float(up @ (pose.position - target_pose.position)) - surface.high - support_along(obj, pose, up)
-        over = float(polygon_signed_distance(surface, local[:, :2]).min())
+        gap = float(up @ (pose.position - target_pose.position)) - surface.high - support_along(self._half[name], pose, up)
+        if completely:
+            over = float(polygon_signed_distance(self._supports[target.name], local[:, :2]).min())
+        else:
+            over = point_polygon_distance(self._supports[target.name], float(local[0, 0]), float(local[0, 1]))
         return min(ON_GAP - abs(gap), over, -world.distance(name, target_name))
 
     def _holds(self, robot: TaskObject, held: str, world: WorldState) -> float:

@@ -3,6 +3,9 @@ polygon times an interval, so the distance from outside is the hypot of the two 
 
 from __future__ import annotations
 
+import functools
+from dataclasses import dataclass
+
 import numpy as np
 
 from prsc.task.terms import Region
@@ -19,19 +22,54 @@ def polygon_vertices(region: Region) -> np.ndarray:
     return np.linalg.solve(a, np.stack([offsets, offsets[nxt]], axis=1)[..., None])[..., 0]
 
 
-def polygon_signed_distance(region: Region, q: np.ndarray) -> np.ndarray:
-    """Signed distance of points q (m, 2) to the footprint polygon: inside positive."""
-    normals = np.asarray(region.normals, dtype=float)
-    offsets = np.asarray(region.offsets, dtype=float)
-    margins = offsets[None, :] - q @ normals.T  # (m, k)
-    inside = margins.min(axis=1)
+@dataclass(frozen=True)
+class _Polygon:
+    """A footprint's rows and edges as arrays, computed once per region (evaluated at every step)."""
+
+    normals: np.ndarray  # (k, 2)
+    offsets: np.ndarray  # (k,)
+    start: np.ndarray  # (k, 2): each edge's first vertex
+    edge: np.ndarray  # (k, 2)
+    length2: np.ndarray  # (k,)
+
+
+@functools.lru_cache(maxsize=256)
+def prepared_polygon(region: Region) -> _Polygon:
+    """The footprint of a region as arrays (cached: an evaluator prepares each region once)."""
+    return _prepare(region)
+
+
+def _prepare(region: Region) -> _Polygon:
     vertices = polygon_vertices(region)
-    start, end = vertices, np.roll(vertices, -1, axis=0)
-    edge = end - start
-    t = np.clip(np.einsum("mkd,kd->mk", q[:, None, :] - start[None], edge) / np.einsum("kd,kd->k", edge, edge), 0.0, 1.0)
-    nearest = start[None] + t[..., None] * edge[None]
-    outside = np.linalg.norm(q[:, None, :] - nearest, axis=2).min(axis=1)
+    edge = np.roll(vertices, -1, axis=0) - vertices
+    return _Polygon(np.asarray(region.normals, dtype=float), np.asarray(region.offsets, dtype=float), vertices, edge,
+                    np.einsum("kd,kd->k", edge, edge))
+
+
+def polygon_signed_distance(region: Region | _Polygon, q: np.ndarray) -> np.ndarray:
+    """Signed distance of points q (m, 2) to the footprint polygon: inside positive."""
+    poly = region if isinstance(region, _Polygon) else prepared_polygon(region)
+    inside = (poly.offsets[None, :] - q @ poly.normals.T).min(axis=1)  # exact inside a convex polygon
+    if np.all(inside >= 0.0):
+        return inside
+    relative = q[:, None, :] - poly.start[None]
+    t = np.clip(np.einsum("mkd,kd->mk", relative, poly.edge) / poly.length2, 0.0, 1.0)
+    gaps = relative - t[..., None] * poly.edge[None]
+    outside = np.sqrt(np.einsum("mkd,mkd->mk", gaps, gaps).min(axis=1))
     return np.where(inside >= 0.0, inside, -outside)
+
+
+def point_polygon_distance(poly: _Polygon, x: float, y: float) -> float:
+    """polygon_signed_distance of one point, in plain floats (the evaluator's per-step path)."""
+    inside = min(c - nx * x - ny * y for (nx, ny), c in zip(poly.normals.tolist(), poly.offsets.tolist()))
+    if inside >= 0.0:
+        return inside
+    best = float("inf")
+    for (sx, sy), (ex, ey), length2 in zip(poly.start.tolist(), poly.edge.tolist(), poly.length2.tolist()):
+        rx, ry = x - sx, y - sy
+        t = min(1.0, max(0.0, (rx * ex + ry * ey) / length2))
+        best = min(best, (rx - t * ex) ** 2 + (ry - t * ey) ** 2)
+    return -best ** 0.5
 
 
 def prism_signed_distance(region: Region, points: np.ndarray) -> np.ndarray:

@@ -75,3 +75,21 @@ def test_prsc_check_reports_the_task_and_its_errors_with_a_caret(tmp_path, capsy
     path.write_text(SCENE + "goal cube in tray for 2 seconds\n")
     assert main(["check", str(path)]) == 0
     assert "goal cube in tray for 2 seconds" in capsys.readouterr().out
+
+
+def test_the_examples_of_docs_tasks_compile(tmp_path):
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "tasks.md").read_text()
+    spec = re.search(r"```prs\n(.*?)```", text, re.S).group(1)
+    path = tmp_path / "example.prs"
+    path.write_text(spec)
+    program = compile_program(str(path))
+    assert len(program.task.goals) == 1 and len(program.task.failures) == 2 and program.task.time_limit == 20
+    statements = re.findall(r"^\| `(?:goal|fail|terminate|record).*?` \| `([^`]*)` \|", text, re.M)
+    assert len(statements) == 4
+    scene = spec.split("\ngoal ")[0] + "\n"
+    for statement in statements:
+        path.write_text(scene + statement + "\n")
+        assert compile_program(str(path)).task
