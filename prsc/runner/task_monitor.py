@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 from prsc.backends.names import with_body_names
+from prsc.task.evaluate import distance_pairs, velocity_objects
 from prsc.task.monitor import EpisodeMonitor, TaskStatus
 from prsc.task.terms import Task
 from prsc.task.world import DISTANCE_CAP, Pose, WorldState
@@ -62,66 +63,107 @@ class MjWorld:
                     self.geoms[f"{obj['name']}/{finger}"] = np.array(
                         [g for g in range(model.ngeom) if collides[g] and model.geom_bodyid[g] == link], dtype=int)
         self._fromto = np.zeros(6)
-        self._boxes_at: tuple | None = None
-        self._boxes: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 3)), np.zeros((0, 3)))
-        self._object_cache: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._velocity = np.zeros(6)
+        self._pair_geoms: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+        self._distances_at: tuple | None = None
+        self._distances: dict[tuple[str, str], float] = {}
+        self._centres: np.ndarray | None = None
+        self._halves: np.ndarray | None = None
+        welded = model.body_weldid[model.geom_bodyid] == 0
+        self._moving = ~(welded & (model.body_mocapid[model.geom_bodyid] < 0))
+        self._moving_ids = np.flatnonzero(self._moving)
         self._nearest: dict[tuple[str, str], tuple[int, int]] = {}  # each pair's nearest geoms at the last step
+        self.prepare(())
 
-    def _object_boxes(self, data: mujoco.MjData, name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(lows, highs) of the world-aligned bounding boxes of an object's geoms (from MuJoCo's own
-        geom_aabb) and the box around them all, computed once per state (a state set and forwarded
-        without stepping is a new one)."""
-        key = (data._address, data.time, data.geom_xpos.tobytes(), data.geom_xmat.tobytes())
-        if self._boxes_at != key:
+    def _state_key(self, data: mujoco.MjData) -> tuple:
+        """What identifies a state (a state set and forwarded without stepping is a new one)."""
+        return (data._address, data.time, data.qpos.tobytes(), data.mocap_pos.tobytes(), data.mocap_quat.tobytes())
+
+    def _geom_centres(self, data: mujoco.MjData) -> np.ndarray:
+        """Centres of the geoms' broad-phase boxes: a fixed geom's world-aligned box (MuJoCo's own geom_aabb,
+        placed once), a moving geom's cube around its bounding sphere (centred on the geom)."""
+        if self._centres is None:
             rotations = data.geom_xmat.reshape(-1, 3, 3)
             aabb = self.model.geom_aabb
-            centres = data.geom_xpos + np.einsum("nij,nj->ni", rotations, aabb[:, :3])
-            halves = np.einsum("nij,nj->ni", np.abs(rotations), aabb[:, 3:])
-            self._boxes = (centres - halves, centres + halves)
-            self._boxes_at = key
-            self._object_cache = {}
-        found = self._object_cache.get(name)
+            self._centres = data.geom_xpos + np.einsum("nij,nj->ni", rotations, aabb[:, :3])
+            self._halves = np.where(self._moving[:, None], self.model.geom_rbound[:, None],
+                                    np.einsum("nij,nj->ni", np.abs(rotations), aabb[:, 3:]))
+            self.prepare(self._batch)  # the pairs' half sizes, now known
+        self._centres[self._moving_ids] = data.geom_xpos[self._moving_ids]
+        return self._centres
+
+    def _pairs_of(self, a: str, b: str) -> tuple[np.ndarray, np.ndarray]:
+        """Every (geom of a, geom of b), flattened."""
+        found = self._pair_geoms.get((a, b))
         if found is None:
-            geoms = self.geoms[name]
-            low, high = self._boxes[0][geoms], self._boxes[1][geoms]
-            found = self._object_cache[name] = (low, high, np.stack([low.min(axis=0), high.max(axis=0)]))
+            ga, gb = self.geoms.get(a, np.zeros(0, int)), self.geoms.get(b, np.zeros(0, int))
+            found = self._pair_geoms[(a, b)] = (np.repeat(ga, len(gb)), np.tile(gb, len(ga)))
         return found
 
-    def pose(self, data: mujoco.MjData, name: str, dims) -> Pose:
-        """The object's box centre and rotation now (the body frame is the box's, prsc/backends)."""
+    def prepare(self, pairs) -> None:
+        """Distances the task will ask for at every step, computed together (one broad phase per step)."""
+        self._batch = list(dict.fromkeys(pairs))
+        parts = [self._pairs_of(a, b) for a, b in self._batch]
+        self._batch_a = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, int)
+        self._batch_b = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, int)
+        self._batch_halves = None if self._halves is None else self._halves[self._batch_a] + self._halves[self._batch_b]
+        bounds = np.cumsum([0] + [len(p[0]) for p in parts])
+        self._batch_slices = list(zip(bounds[:-1].tolist(), bounds[1:].tolist()))
+
+    def pose(self, data: mujoco.MjData, name: str, moving: bool = True) -> Pose:
+        """The object's box centre and rotation now (the body frame is the box's, prsc/backends), views into
+        `data` valid until it steps; its velocities when `moving` (else zeros: the task reads none)."""
         b = self.body[name]
+        if not moving:
+            return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), _STILL, _STILL)
         velocity = np.zeros(6)
         mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_BODY, b, velocity, 0)
-        return Pose(data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy(), velocity[3:].copy(), velocity[:3].copy())
+        return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), velocity[3:], velocity[:3])
 
     def distance(self, data: mujoco.MjData, a: str, b: str) -> float:
         """The least signed distance between the geoms of a and b (capped at DISTANCE_CAP)."""
-        ga, gb = self.geoms.get(a), self.geoms.get(b)
-        if ga is None or gb is None or not len(ga) or not len(gb):
-            return DISTANCE_CAP
-        best, nearest = DISTANCE_CAP, self._nearest.get((a, b))
-        if nearest is not None:  # the pair nearest at the last step bounds this one's search (steps are short)
-            best = min(best, mujoco.mj_geomDistance(self.model, data, nearest[0], nearest[1], best, self._fromto))
-        # Broad phase: the distance between the geoms' world-aligned bounding boxes bounds theirs below,
-        # first the objects' (one box around all their geoms), then each pair's.
-        (low_a, high_a, box_a), (low_b, high_b, box_b) = self._object_boxes(data, a), self._object_boxes(data, b)
-        gap = np.maximum(np.maximum(box_b[0] - box_a[1], box_a[0] - box_b[1]), 0.0)
-        if float(gap @ gap) >= best * best:
-            return float(best)
-        gaps = np.maximum(np.maximum(low_b[None] - high_a[:, None], low_a[:, None] - high_b[None]), 0.0)
-        lower = np.sqrt(np.einsum("ijd,ijd->ij", gaps, gaps)).ravel()
-        candidates = np.flatnonzero(lower < best)
-        width, ids_a, ids_b = len(gb), ga.tolist(), gb.tolist()
-        for k, bound in sorted(zip(candidates.tolist(), lower[candidates].tolist()), key=lambda item: item[1]):
-            if bound >= best:
-                break
-            pair = (ids_a[k // width], ids_b[k % width])
-            if pair == nearest:
-                continue
-            d = mujoco.mj_geomDistance(self.model, data, pair[0], pair[1], best, self._fromto)
-            if d < best:
-                best, self._nearest[(a, b)] = d, pair
-        return float(best)
+        key = self._state_key(data)
+        if self._distances_at != key:
+            self._distances_at, self._distances = key, {}
+            centres = self._geom_centres(data)
+            if self._batch:
+                self._distances = self._nearest_of(data, self._batch, self._batch_slices, self._batch_a,
+                                                   self._batch_b, self._batch_halves, centres)
+        found = self._distances.get((a, b))
+        if found is None:
+            ia, ib = self._pairs_of(a, b)
+            found = self._distances[(a, b)] = self._nearest_of(
+                data, [(a, b)], [(0, len(ia))], ia, ib, self._halves[ia] + self._halves[ib], self._centres)[(a, b)]
+        return found
+
+    def _nearest_of(self, data, pairs, slices, ia, ib, halves, centres) -> dict[tuple[str, str], float]:
+        """Broad phase (the distance between two geoms' world-aligned boxes bounds theirs below) over every
+        geom pair at once, then MuJoCo's own mj_geomDistance, from the pair nearest at the last step."""
+        if not len(ia):
+            return {pair: DISTANCE_CAP for pair in pairs}
+        gaps = np.maximum(np.abs(centres[ia] - centres[ib]) - halves, 0.0)
+        lower = np.sqrt(np.einsum("nd,nd->n", gaps, gaps)).tolist()
+        ids_a, ids_b = ia.tolist(), ib.tolist()
+        out: dict[tuple[str, str], float] = {}
+        for pair, (first, last) in zip(pairs, slices):
+            best, nearest = DISTANCE_CAP, self._nearest.get(pair)
+            if nearest is not None:  # steps are short: the last nearest pair bounds this step's search
+                best = min(best, mujoco.mj_geomDistance(self.model, data, nearest[0], nearest[1], best, self._fromto))
+            for bound, k in sorted((lower[k], k) for k in range(first, last) if lower[k] < best):
+                if bound >= best:
+                    break
+                geoms = (ids_a[k], ids_b[k])
+                if geoms == nearest:
+                    continue
+                d = mujoco.mj_geomDistance(self.model, data, geoms[0], geoms[1], best, self._fromto)
+                if d < best:
+                    best, self._nearest[pair] = d, geoms
+            out[pair] = float(best)
+        return out
+
+
+_STILL = np.zeros(3)
+_STILL.flags.writeable = False
 
 
 def _has(task: Task, name: str) -> bool:
@@ -134,11 +176,13 @@ class TaskMonitor:
     def __init__(self, scene: dict, model: mujoco.MjModel):
         self.task = Task.from_json(scene["task"])
         self.world = MjWorld(scene, model, self.task)
+        self.world.prepare(distance_pairs(self.task))
+        self.moving = velocity_objects(self.task)  # the objects whose velocities the task reads
         self.monitor = EpisodeMonitor(self.task)
 
     def state(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
         """The world state of `data` at `data.time` (distances computed when the task asks)."""
-        poses = _LazyPoses(self.world, data, {o.name: o.dimensions for o in self.task.objects})
+        poses = _LazyPoses(self.world, data, self.moving)
         return WorldState(float(data.time), poses, lambda a, b: self.world.distance(data, a, b))
 
     def update(self, model: mujoco.MjModel, data: mujoco.MjData) -> TaskStatus:
@@ -153,11 +197,11 @@ class TaskMonitor:
 class _LazyPoses(dict):
     """Poses read from MjData when the evaluator first asks for them."""
 
-    def __init__(self, world: MjWorld, data: mujoco.MjData, dims: dict):
+    def __init__(self, world: MjWorld, data: mujoco.MjData, moving: frozenset[str]):
         super().__init__()
-        self.world, self.data, self.dims = world, data, dims
+        self.world, self.data, self.moving = world, data, moving
 
     def __missing__(self, name: str) -> Pose:
-        pose = self.world.pose(self.data, name, self.dims[name])
+        pose = self.world.pose(self.data, name, name in self.moving)
         self[name] = pose
         return pose

@@ -4,6 +4,8 @@ metres, the signed distance to where its truth changes (LANGUAGE.md section 8, d
 from __future__ import annotations
 
 import math
+import operator
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,83 +53,99 @@ class Evaluator:
         self._half = {o.name: np.asarray(o.dimensions, dtype=float) / 2 for o in task.objects}
         self._boxes = {o.name: box_region(o.dimensions) for o in task.objects}
         self._supports = {o.name: prepared_polygon(o.support) for o in task.objects}
+        self._compiled: dict[int, tuple[Term, Callable[[WorldState], object]]] = {}
 
     # ------------------------------------------------------------ values
+    # Each term is turned once into a closure over its children (evaluated at every control step).
 
     def value(self, term: Term, world: WorldState):
         """A term's value: Truth for a predicate, else a float or a vector (numpy, 3)."""
-        op = term.op
-        if term.is_predicate:
-            return self.truth(term, world)
-        if op == "const":
-            return float(term.value)  # type: ignore[arg-type]
-        if op == "vector":
-            return np.array([self._number(a, world) for a in term.args])
-        if op == "object":
-            return world.poses[term.name].position  # type: ignore[index]
-        if op == "attr":
-            return self._attribute(term, world)
-        if op == "neg":
-            return -self.value(term.args[0], world)
-        if op == "arith":
-            left, right = (self.value(a, world) for a in term.args)
-            return {"+": lambda: left + right, "-": lambda: left - right, "*": lambda: left * right,
-                    "/": lambda: left / right}[term.name]()  # type: ignore[index]
-        if op == "distance":
-            a, b = (self._point(t, world) for t in term.args)
-            return _norm(a - b)
-        raise ValueError(f"unknown task term {op!r}")
-
-    def _number(self, term: Term, world: WorldState) -> float:
-        value = self.value(term, world)
-        return float(value.robustness if isinstance(value, Truth) else value)
-
-    def _point(self, term: Term, world: WorldState) -> np.ndarray:
-        if term.op == "object":
-            return world.poses[term.name].position  # type: ignore[index]
-        return np.asarray(self.value(term, world), dtype=float)
-
-    def _attribute(self, term: Term, world: WorldState):
-        target = term.args[0]
-        name = term.name
-        if target.op == "object":
-            obj, pose = self.objects[target.name], world.poses[target.name]  # type: ignore[index]
-            if name == "position":
-                return pose.position
-            if name == "speed":
-                return _norm(pose.linear)
-            if name in ("width", "length", "height"):
-                return obj.dimensions[("width", "length", "height").index(name)]
-            vector = pose.position
-        else:
-            vector = self.value(target, world)
-        return float(vector["xyz".index(name)])  # type: ignore[index, operator]
-
-    # ------------------------------------------------------------ predicates
+        return self.compiled(term)(world)
 
     def truth(self, term: Term, world: WorldState) -> Truth:
         """A predicate's truth and robustness."""
-        op = term.op
+        return self.compiled(term)(world)
+
+    def compiled(self, term: Term) -> Callable[[WorldState], object]:
+        """The term as a function of the world state (made once per term)."""
+        found = self._compiled.get(id(term))
+        if found is None or found[0] is not term:
+            found = self._compiled[id(term)] = (term, self._compile(term))
+        return found[1]
+
+    def _compile(self, term: Term) -> Callable[[WorldState], object]:
+        op, args, name = term.op, term.args, term.name
+        children = [self.compiled(a) for a in args]
+        if op == "const":
+            value = float(term.value)  # type: ignore[arg-type]
+            return lambda w: value
         if op == "true":
-            return Truth(True, math.inf)
+            return lambda w: Truth(True, math.inf)
+        if op == "object":
+            return lambda w: w.poses[name].position
+        if op == "attr":
+            return self._compile_attribute(term, children[0])
+        if op == "vector":
+            return lambda w: np.array([_as_number(f(w)) for f in children])
+        if op == "neg":
+            inner = children[0]
+            return lambda w: -inner(w)
+        if op == "arith":
+            left, right = children
+            combine = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": operator.truediv}[name]  # type: ignore[index]
+            return lambda w: combine(left(w), right(w))
+        if op == "distance":
+            first, second = children
+            return lambda w: _norm(np.asarray(first(w), dtype=float) - np.asarray(second(w), dtype=float))
         if op == "and":
-            parts = [self.truth(a, world) for a in term.args]
-            return Truth(all(p.holds for p in parts), min(p.robustness for p in parts))
+            def conjunction(w):
+                parts = [f(w) for f in children]
+                return Truth(all(p.holds for p in parts), min(p.robustness for p in parts))
+            return conjunction
         if op == "or":
-            parts = [self.truth(a, world) for a in term.args]
-            return Truth(any(p.holds for p in parts), max(p.robustness for p in parts))
+            def disjunction(w):
+                parts = [f(w) for f in children]
+                return Truth(any(p.holds for p in parts), max(p.robustness for p in parts))
+            return disjunction
         if op == "not":
-            inner = self.truth(term.args[0], world)
-            return Truth(not inner.holds, -inner.robustness)
+            inner = children[0]
+
+            def negation(w):
+                value = inner(w)
+                return Truth(not value.holds, -value.robustness)
+            return negation
         if op == "compare":
-            return _compare(term.name, self._number(term.args[0], world), self._number(term.args[1], world))  # type: ignore[arg-type]
-        rho = self.robustness(term, world)
-        return Truth(rho >= 0.0, rho)
+            first, second = children
+            return lambda w: _compare(name, _as_number(first(w)), _as_number(second(w)))  # type: ignore[arg-type]
+        if term.is_predicate:
+            def relation(w):
+                rho = self.robustness(term, w)
+                return Truth(rho >= 0.0, rho)
+            return relation
+        raise ValueError(f"unknown task term {op!r}")
+
+    def _compile_attribute(self, term: Term, target: Callable[[WorldState], object]) -> Callable[[WorldState], object]:
+        attribute, of = term.name, term.args[0]
+        if of.op == "object":
+            obj = of.name
+            if attribute == "position":
+                return lambda w: w.poses[obj].position
+            if attribute == "speed":
+                return lambda w: _norm(w.poses[obj].linear)
+            if attribute in ("width", "length", "height"):
+                size = self.objects[obj].dimensions[("width", "length", "height").index(attribute)]  # type: ignore[index]
+                return lambda w: size
+        axis = "xyz".index(attribute)  # type: ignore[arg-type]
+        return lambda w: float(target(w)[axis])  # type: ignore[index]
+
+    # ------------------------------------------------------------ predicates
 
     def robustness(self, term: Term, world: WorldState) -> float:
         """The robustness of a relation or state word (it holds where it is >= 0)."""
         op = term.op
         name = term.args[0].name
+        if op == "touches":
+            return -world.distance(name, term.args[1].name)  # type: ignore[arg-type]
         obj, pose = self.objects[name], world.poses[name]  # type: ignore[index]
         if op in ("in", "on"):
             target = term.args[1].name
@@ -135,11 +153,9 @@ class Evaluator:
                                      world, name, target)  # type: ignore[arg-type]
         if op in DIRECTIONS:
             other = world.poses[term.args[1].name]  # type: ignore[index]
-            by = self._number(term.args[2], world) if len(term.args) > 2 else 0.0
+            by = _as_number(self.value(term.args[2], world)) if len(term.args) > 2 else 0.0
             n = other.rotation @ np.asarray(DIRECTIONS[op])
             return float(n @ (pose.position - other.position)) - by - support_along(self._half[name], pose, n)
-        if op == "touches":
-            return -world.distance(name, term.args[1].name)  # type: ignore[arg-type]
         if op == "at_rest":
             radius = _norm(self._half[name])
             return min(REST_SPEED - _norm(pose.linear), radius * (REST_ANGULAR - _norm(pose.angular)))
@@ -185,6 +201,49 @@ class Evaluator:
         margins = np.stack([(tan_x * y - x) / math.hypot(1, tan_x), (tan_x * y + x) / math.hypot(1, tan_x),
                             (tan_y * y - z) / math.hypot(1, tan_y), (tan_y * y + z) / math.hypot(1, tan_y), y])
         return float(margins.min())
+
+
+def velocity_objects(task: Task) -> frozenset[str]:
+    """The objects whose velocities the task reads (`at rest`, `.speed`)."""
+    out: set[str] = set()
+
+    def walk(term: Term) -> None:
+        for arg in term.args:
+            walk(arg)
+        if term.op == "at_rest" or (term.op == "attr" and term.name == "speed"):
+            out.add(term.args[0].name)  # type: ignore[arg-type]
+
+    s = task.statements
+    for statement in (*s.goals, *s.failures, *s.records):
+        walk(statement.expr)
+    return frozenset(out)
+
+
+def distance_pairs(task: Task) -> list[tuple[str, str]]:
+    """The (object or link, object) pairs whose distance the task reads at every step."""
+    objects = {o.name: o for o in task.objects}
+    out: list[tuple[str, str]] = []
+
+    def walk(term: Term) -> None:
+        for arg in term.args:
+            walk(arg)
+        names = [a.name for a in term.args if a.op == "object"]
+        if term.op == "touches" or term.op == "on" or (term.op == "in" and objects[names[1]].container):
+            out.append((names[0], names[1]))
+        elif term.op == "holds":
+            robot, held = objects[names[0]], names[1]
+            out.extend((f"{robot.name}/{finger}", held) for finger in robot.fingers)
+            out.extend((held, other) for other in objects if other not in (robot.name, held)
+                       and objects[other].camera is None)
+
+    s = task.statements
+    for statement in (*s.goals, *s.failures, *s.records):
+        walk(statement.expr)
+    return out
+
+
+def _as_number(value) -> float:
+    return float(value.robustness if isinstance(value, Truth) else value)
 
 
 def _compare(op: str, a: float, b: float) -> Truth:

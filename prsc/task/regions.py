@@ -31,6 +31,8 @@ class _Polygon:
     start: np.ndarray  # (k, 2): each edge's first vertex
     edge: np.ndarray  # (k, 2)
     length2: np.ndarray  # (k,)
+    rows: tuple[tuple[float, float, float], ...]  # (nx, ny, c) per row, as floats for one point
+    edges: tuple[tuple[float, float, float, float, float], ...]  # (sx, sy, ex, ey, length2) per edge
 
 
 @functools.lru_cache(maxsize=256)
@@ -42,8 +44,10 @@ def prepared_polygon(region: Region) -> _Polygon:
 def _prepare(region: Region) -> _Polygon:
     vertices = polygon_vertices(region)
     edge = np.roll(vertices, -1, axis=0) - vertices
+    length2 = np.einsum("kd,kd->k", edge, edge)
     return _Polygon(np.asarray(region.normals, dtype=float), np.asarray(region.offsets, dtype=float), vertices, edge,
-                    np.einsum("kd,kd->k", edge, edge))
+                    length2, tuple((float(n[0]), float(n[1]), float(c)) for n, c in zip(region.normals, region.offsets)),
+                    tuple((*map(float, v), *map(float, e), float(l2)) for v, e, l2 in zip(vertices, edge, length2)))
 
 
 def polygon_signed_distance(region: Region | _Polygon, q: np.ndarray) -> np.ndarray:
@@ -61,11 +65,11 @@ def polygon_signed_distance(region: Region | _Polygon, q: np.ndarray) -> np.ndar
 
 def point_polygon_distance(poly: _Polygon, x: float, y: float) -> float:
     """polygon_signed_distance of one point, in plain floats (the evaluator's per-step path)."""
-    inside = min(c - nx * x - ny * y for (nx, ny), c in zip(poly.normals.tolist(), poly.offsets.tolist()))
+    inside = min(c - nx * x - ny * y for nx, ny, c in poly.rows)
     if inside >= 0.0:
         return inside
     best = float("inf")
-    for (sx, sy), (ex, ey), length2 in zip(poly.start.tolist(), poly.edge.tolist(), poly.length2.tolist()):
+    for sx, sy, ex, ey, length2 in poly.edges:
         rx, ry = x - sx, y - sy
         t = min(1.0, max(0.0, (rx * ex + ry * ey) / length2))
         best = min(best, (rx - t * ex) ** 2 + (ry - t * ey) ** 2)
