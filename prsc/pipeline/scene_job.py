@@ -109,13 +109,11 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
             path = root / files[target]
             try:
                 data = TARGETS[target].render()(scene, path, store)
-                # The compiled task (LANGUAGE.md section 8) goes with every format: a bundle holds
-                # task.json, a single file has NAME.task.json beside it, in place before the file.
+                # The compiled task (LANGUAGE.md section 8): a bundle holds it as task.json (in place
+                # with the bundle, whole or not at all); the scene JSON holds it under "task".
                 if TARGETS[target].bundle:
                     atomic_write_tree(path, {**data, TASK_FILE: task} if task is not None else data)
                 else:
-                    if task is not None:
-                        atomic_write(path.with_name(path.stem + "." + TASK_FILE), task)
                     atomic_write(path, data)
                 try:
                     record_file(root, index, target, files[target])
