@@ -203,42 +203,40 @@ class Evaluator:
         return float(margins.min())
 
 
-def velocity_objects(task: Task) -> frozenset[str]:
-    """The objects whose velocities the task reads (`at rest`, `.speed`)."""
-    out: set[str] = set()
+def every_term(task: Task) -> list[Term]:
+    """Every term of every statement, children before their parents."""
+    out: list[Term] = []
 
     def walk(term: Term) -> None:
         for arg in term.args:
             walk(arg)
-        if term.op == "at_rest" or (term.op == "attr" and term.name == "speed"):
-            out.add(term.args[0].name)  # type: ignore[arg-type]
+        out.append(term)
 
     s = task.statements
     for statement in (*s.goals, *s.failures, *s.records):
         walk(statement.expr)
-    return frozenset(out)
+    return out
+
+
+def velocity_objects(task: Task) -> frozenset[str]:
+    """The objects whose velocities the task reads (`at rest`, `.speed`)."""
+    return frozenset(t.args[0].name for t in every_term(task)  # type: ignore[misc]
+                     if t.op == "at_rest" or (t.op == "attr" and t.name == "speed" and t.args[0].op == "object"))
 
 
 def distance_pairs(task: Task) -> list[tuple[str, str]]:
     """The (object or link, object) pairs whose distance the task reads at every step."""
     objects = {o.name: o for o in task.objects}
     out: list[tuple[str, str]] = []
-
-    def walk(term: Term) -> None:
-        for arg in term.args:
-            walk(arg)
+    for term in every_term(task):
         names = [a.name for a in term.args if a.op == "object"]
         if term.op == "touches" or term.op == "on" or (term.op == "in" and objects[names[1]].container):
-            out.append((names[0], names[1]))
+            out.append((names[0], names[1]))  # type: ignore[arg-type]
         elif term.op == "holds":
-            robot, held = objects[names[0]], names[1]
-            out.extend((f"{robot.name}/{finger}", held) for finger in robot.fingers)
-            out.extend((held, other) for other in objects if other not in (robot.name, held)
+            robot, held = objects[names[0]], names[1]  # type: ignore[index]
+            out.extend((f"{robot.name}/{finger}", held) for finger in robot.fingers)  # type: ignore[misc]
+            out.extend((held, other) for other in objects if other not in (robot.name, held)  # type: ignore[misc]
                        and objects[other].camera is None)
-
-    s = task.statements
-    for statement in (*s.goals, *s.failures, *s.records):
-        walk(statement.expr)
     return out
 
 
