@@ -55,13 +55,11 @@ class MjWorld:
             if len(bodies) > 1 and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
                 # A mounted robot touches with its moving links: its base rests where it was placed.
                 bodies = [b for b in bodies if model.body_weldid[b] != 0]
-            self.geoms[obj["name"]] = np.array([g for g in range(model.ngeom) if collides[g]
-                                                and int(model.geom_bodyid[g]) in set(bodies)], dtype=int)
+            self.geoms[obj["name"]] = np.flatnonzero(collides & np.isin(model.geom_bodyid, bodies))
             for finger in task.object(obj["name"]).fingers if _has(task, obj["name"]) else ():
                 link = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{obj['body']}/{finger}")
                 if link >= 0:
-                    self.geoms[f"{obj['name']}/{finger}"] = np.array(
-                        [g for g in range(model.ngeom) if collides[g] and model.geom_bodyid[g] == link], dtype=int)
+                    self.geoms[f"{obj['name']}/{finger}"] = np.flatnonzero(collides & (model.geom_bodyid == link))
         self._fromto = np.zeros(6)
         self._velocity = np.zeros(6)
         self._pair_geoms: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
