@@ -140,23 +140,30 @@ class MjWorld:
         if not len(ia):
             return {pair: DISTANCE_CAP for pair in pairs}
         gaps = np.maximum(np.abs(centres[ia] - centres[ib]) - halves, 0.0)
-        lower = np.sqrt(np.einsum("nd,nd->n", gaps, gaps)).tolist()
-        ids_a, ids_b = ia.tolist(), ib.tolist()
-        out: dict[tuple[str, str], float] = {}
-        for pair, (first, last) in zip(pairs, slices):
-            best, nearest = DISTANCE_CAP, self._nearest.get(pair)
-            if nearest is not None:  # steps are short: the last nearest pair bounds this step's search
-                best = min(best, mujoco.mj_geomDistance(self.model, data, nearest[0], nearest[1], best, self._fromto))
-            for bound, k in sorted((lower[k], k) for k in range(first, last) if lower[k] < best):
-                if bound >= best:
-                    break
-                geoms = (ids_a[k], ids_b[k])
-                if geoms == nearest:
-                    continue
-                d = mujoco.mj_geomDistance(self.model, data, geoms[0], geoms[1], best, self._fromto)
-                if d < best:
-                    best, self._nearest[pair] = d, geoms
-            out[pair] = float(best)
+        lower = np.sqrt(np.einsum("nd,nd->n", gaps, gaps))
+        # Each pair's search starts from its geoms nearest at the last step (steps are short); only geom
+        # pairs whose broad-phase bound is under that distance are computed.
+        bests, nearests = [], []
+        for pair in pairs:
+            nearest = self._nearest.get(pair)
+            nearests.append(nearest)
+            bests.append(DISTANCE_CAP if nearest is None else min(DISTANCE_CAP, mujoco.mj_geomDistance(
+                self.model, data, nearest[0], nearest[1], DISTANCE_CAP, self._fromto)))
+        sizes = [last - first for first, last in slices]
+        candidates = np.flatnonzero(lower < np.repeat(bests, sizes)).tolist()
+        owner = np.repeat(np.arange(len(pairs)), sizes)
+        order = sorted(candidates, key=lambda k: lower[k])
+        for k in order:
+            p = int(owner[k])
+            if lower[k] >= bests[p]:
+                continue
+            geoms = (int(ia[k]), int(ib[k]))
+            if geoms == nearests[p]:
+                continue
+            d = mujoco.mj_geomDistance(self.model, data, geoms[0], geoms[1], bests[p], self._fromto)
+            if d < bests[p]:
+                bests[p], self._nearest[pairs[p]] = d, geoms
+        out = {pair: float(best) for pair, best in zip(pairs, bests)}
         return out
 
 
