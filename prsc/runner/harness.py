@@ -153,7 +153,9 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
     task_record = None
     if monitor is not None:
         if hook is not None and hook.error is not None:
-            task_record = {"outcome": "error", "reason": f"{type(hook.error).__name__}: {hook.error}"}
+            # the monitor failed (a bug, or a task the scene's model cannot answer): the record says so
+            task_record = {"outcome": "error", "trivial": False, "decided_at": None, "robustness": {}, "records": {},
+                           "reason": f"{type(hook.error).__name__}: {hook.error}"}
         else:
             task_record = monitor.result(model, data, controller_finished=finished)
     return EpisodeResult(
