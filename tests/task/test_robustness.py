@@ -7,7 +7,7 @@ import numpy as np
 from scipy.optimize import lsq_linear
 from scipy.spatial.transform import Rotation
 
-from prsc.task.evaluate import Evaluator
+from prsc.task.evaluate import Evaluator, Truth
 from prsc.task.regions import box_corners, box_region
 from prsc.task.terms import Region, Task, TaskObject, TaskStatements, Term
 from prsc.task.world import Pose, WorldState
@@ -112,3 +112,32 @@ def test_the_sign_agrees_with_the_truth_on_12000_random_states():
             assert (value.robustness >= 0) == expected
             checked += 1
     assert checked >= 10_000
+
+
+def test_holds_needs_two_fingers_and_nothing_else_and_visible_needs_the_view():
+    box = box_region((0.1, 0.1, 0.1))
+    top = Region(box.normals, box.offsets, 0.05, 0.05)
+    objects = (TaskObject("arm", (0.1, 0.1, 1.0), top, fingers=("left", "right")),
+               TaskObject("cube", (0.04, 0.04, 0.04), top), TaskObject("table", (1, 1, 0.8), top),
+               TaskObject("cam", (0.1, 0.2, 0.1), top, camera=(60.0, 4 / 3)))
+    evaluator = Evaluator(Task(TaskStatements(), objects))
+    holds = Term("holds", (Term("object", name="arm"), Term("object", name="cube")))
+    still = np.zeros(3)
+    down = Rotation.from_euler("x", -90, degrees=True).as_matrix()  # the camera's +y (its view) points down
+    poses = {"arm": Pose(np.zeros(3), np.eye(3), still, still), "cube": Pose(np.array([0, 0, 0.5]), np.eye(3), still, still),
+             "table": Pose(np.array([0, 0, -1.0]), np.eye(3), still, still),
+             "cam": Pose(np.array([0, 0, 2.0]), down, still, still)}
+
+    def world(distances):
+        return WorldState(0.0, poses, lambda a, b: distances.get((a, b), 0.3))
+
+    gripped = {("arm/left", "cube"): -0.001, ("arm/right", "cube"): -0.002, ("cube", "table"): 0.4}
+    assert evaluator.truth(holds, world(gripped)) == Truth(True, 0.001)
+    one_finger = {**gripped, ("arm/right", "cube"): 0.01}
+    assert evaluator.truth(holds, world(one_finger)) == Truth(False, -0.01)
+    on_table = {**gripped, ("cube", "table"): -0.0005}
+    assert evaluator.truth(holds, world(on_table)) == Truth(False, -0.0005)
+    visible = Term("visible", (Term("object", name="cube"), Term("object", name="cam")))
+    assert evaluator.truth(visible, world({})).holds
+    poses["cube"] = Pose(np.array([3.0, 0, 0.5]), np.eye(3), still, still)
+    assert not evaluator.truth(visible, world({})).holds
