@@ -16,6 +16,10 @@ written into one MuJoCo model without recompiling (docs/learning.md). Needs the 
   EGL and OSMesa that works, chosen before mujoco is imported);
 - `info["scene"]` is the scene JSON of the episode, given by `reset` only (a step's info is
   empty: a step costs MuJoCo's steps and little more).
+- with a task in the spec (docs/tasks.md): `terminated` when the goal is reached or a failure
+  holds, `truncated` at `terminate after`, `info["is_success"]` and `info["task"]` (status and
+  each statement's robustness), reward 1 on success (`reward="sparse"`, the default) or the
+  goal's robustness (`reward="dense"`); user functions still override.
 """
 
 from __future__ import annotations
@@ -65,7 +69,7 @@ class SceneEnv(gymnasium.Env):
         frame_skip: int = 10,
         observation: SceneFunction | str | Mapping[str, str | Sequence[str]] | None = None,
         observation_space: spaces.Space | None = None,
-        reward: SceneFunction | None = None,
+        reward: SceneFunction | str | None = None,
         terminated: SceneFunction | None = None,
         max_episode_steps: int | None = None,
         render_mode: str | None = None,
@@ -82,6 +86,7 @@ class SceneEnv(gymnasium.Env):
             choose_gl_backend()  # headless rendering: MuJoCo reads MUJOCO_GL when first imported
         import mujoco
 
+        from prsc.runner.task_steps import TaskSteps
         from prsc.scenario import load
         from prsc.scene_cameras import Renderers, camera_views
 
@@ -100,8 +105,11 @@ class SceneEnv(gymnasium.Env):
         self.max_episode_steps = max_episode_steps
         self.render_mode = render_mode
         self._observe = observation if callable(observation) else None
-        self._reward = reward
+        self._reward = reward if callable(reward) else None
         self._terminated = terminated
+        if isinstance(reward, str) and not self.scenario.program.task:
+            raise ValueError(f"reward={reward!r} reads the spec's task, and {spec} states none (docs/tasks.md)")
+        self._task = TaskSteps(reward if isinstance(reward, str) else "sparse") if self.scenario.program.task else None
         self._size = (height, width)
         self._renderers = Renderers(self.model)
         self._views = camera_views(self.model, observation) if cameras else ()
@@ -140,8 +148,9 @@ class SceneEnv(gymnasium.Env):
         self._next_index += 1
         self._steps = 0
         self.scenario.apply(self.scene, self.model, self.data)
+        info = self._task.reset(self.scene, self.model, self.data) if self._task else {}
         # A copy: a caller may keep or edit what it was given (Gymnasium's rule); once per episode.
-        return self._observation(), {"scene": copy.deepcopy(self.scene)}
+        return self._observation(), {"scene": copy.deepcopy(self.scene), **info}
 
     def step(self, action):
         """Set the controls (clipped to the action space) and step MuJoCo `frame_skip` times."""
@@ -150,10 +159,11 @@ class SceneEnv(gymnasium.Env):
         np.minimum(np.maximum(action, self._low), self._high, out=self.data.ctrl)  # np.clip costs twice as much
         mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
         self._steps += 1
-        reward = float(self._reward(self.scene, self.model, self.data)) if self._reward else 0.0
-        done = bool(self._terminated(self.scene, self.model, self.data)) if self._terminated else False
-        truncated = self.max_episode_steps is not None and self._steps >= self.max_episode_steps
-        return self._observation(), reward, done, truncated, {}
+        task = self._task.step(self.model, self.data) if self._task else None
+        reward = float(self._reward(self.scene, self.model, self.data)) if self._reward else task.reward if task else 0.0
+        done = bool(self._terminated(self.scene, self.model, self.data)) if self._terminated else bool(task and task.terminated)
+        truncated = bool(task and task.truncated) or (self.max_episode_steps is not None and self._steps >= self.max_episode_steps)
+        return self._observation(), reward, done, truncated, (task.info if task else {})
 
     def render(self):
         """The scene from the free camera, or the spec camera `render_camera`, as an RGB array (render_mode "rgb_array")."""

@@ -6,7 +6,9 @@ Compiles n scenes, runs the first episode to warm the worker (GL context, render
 IK models, MuJoCo's mesh cache), then the other n-1 in this process, as one worker of
 `prsc run` runs them. Reports CPU seconds per episode (process time, all threads: the
 GL rasteriser's too), episodes per CPU-second, and the CPU spent loading MJCF files,
-stepping (`mj_step`) and rendering.
+stepping (`mj_step`) and rendering. A spec with a task (LANGUAGE.md section 8) runs each
+measured episode twice, with and without the task monitor, interleaved, and reports the
+monitor's share of an episode's CPU.
 """
 
 from __future__ import annotations
@@ -46,7 +48,9 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
     gl_backend = choose_gl_backend()
     import mujoco
 
-    from prsc.runner import harness, rendering
+    import dataclasses
+
+    from prsc.runner import harness, rendering, task_monitor
     from prsc.runner.controller import parse_target
     from prsc.runner.episode_records import DEFAULT_MAX_SIM_SECONDS
     from prsc.runner.worker import WorkerConfig
@@ -62,17 +66,25 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
         run_episodes(executor, config, tasks[:1], lambda record: None)
         records: list[dict] = []
         totals: Counter = Counter()
+        with_task = bool(tasks and tasks[0].scene.get("task"))
         with _timed(harness, "load_model", totals, "load"), _timed(mujoco, "mj_step", totals, "step"), \
                 _timed(rendering.OffscreenRenderer, "rgb", totals, "render"), \
                 _timed(rendering.OffscreenRenderer, "depth", totals, "render"), \
-                _timed(rendering, "_render_context", totals, "render"):
-            cpu, wall = time.process_time(), time.perf_counter()
-            run_episodes(executor, config, tasks[1:], records.append)
-            totals["cpu"] = time.process_time() - cpu
-            totals["wall"] = time.perf_counter() - wall
+                _timed(rendering, "_render_context", totals, "render"), \
+                _timed(task_monitor.TaskMonitor, "update", totals, "monitor"):
+            for task in tasks[1:]:  # interleaved: both sides see the same machine load
+                cpu, wall = time.process_time(), time.perf_counter()
+                run_episodes(executor, config, [task], records.append)
+                totals["cpu"] += time.process_time() - cpu
+                totals["wall"] += time.perf_counter() - wall
+                if with_task:
+                    cpu = time.process_time()
+                    run_episodes(executor, config, [dataclasses.replace(task, monitor_task=False)], lambda r: None)
+                    totals["cpu_without_task"] += time.process_time() - cpu
     totals["episodes"] = len(records)
     totals["sim"] = sum(r["sim_seconds"] for r in records)
-    return {"totals": totals, "outcomes": Counter(r["outcome"] for r in records)}
+    return {"totals": totals, "outcomes": Counter(r["outcome"] for r in records), "with_task": with_task,
+            "task_outcomes": Counter(r["task"]["outcome"] for r in records if r.get("task"))}
 
 
 def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) -> None:
@@ -90,3 +102,10 @@ def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) 
           f"({t['sim'] / max(t['step'], 1e-9) / 0.002:,.0f} steps per CPU-second at a 2 ms step), "
           f"render {t['render'] / episodes:.3f}, controller and the rest {other / episodes:.3f} CPU s")
     print("  outcomes: " + ", ".join(f"{o} {c}" for o, c in found["outcomes"].most_common()))
+    if found["with_task"]:
+        without = t["cpu_without_task"]
+        print(f"  the task: {t['cpu'] / episodes:.3f} CPU s per episode monitored, {without / episodes:.3f} without "
+              f"(the same episodes, interleaved): {100 * (t['cpu'] - without) / max(without, 1e-9):+.1f}%; "
+              f"the monitor's own updates {t['monitor'] / episodes:.3f} CPU s per episode "
+              f"({100 * t['monitor'] / max(t['cpu'], 1e-9):.1f}% of a monitored episode)")
+        print("  task outcomes: " + ", ".join(f"{o} {c}" for o, c in found["task_outcomes"].most_common()))

@@ -32,6 +32,11 @@ def summarise(program) -> str:
     for obj in program.objects:
         specs = "; ".join(format_specifier(s) for s in obj.specifiers) or "(no specifiers)"
         lines.append(f"  {obj.name}: {obj.class_name} -- {specs}")
+    if program.task:
+        from prsc.task.describe import describe_statements
+
+        lines.append("  task (LANGUAGE.md section 8):")
+        lines.extend(f"    {line}" for line in describe_statements(program.task))
     return "\n".join(lines) + "\n"
 
 

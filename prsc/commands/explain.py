@@ -164,6 +164,12 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
             lab = labels[check.label_id]
             out.append(f"  checked by rejection: {lab.text}  [{_where(lab.span)}]")
         out.append(f"  sampled position: {np.round(obj.position, 6).tolist()}")
+    if sampler.program.task:
+        from prsc.task.describe import describe_statements
+
+        out.append("")
+        out.append("task, evaluated on the simulated state at every control step (LANGUAGE.md section 8):")
+        out.extend(f"  {line}" for line in describe_statements(sampler.program.task))
     return "\n".join(out) + "\n"
 
 

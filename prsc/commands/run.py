@@ -170,16 +170,21 @@ def run(args: argparse.Namespace) -> int:
     ordered = results.finish()  # index order, as a clean run writes
 
     title = f"{source.name}: {len(ordered)} episodes, seed {args.seed}"
-    from prsc.runner.report import plot_outcomes, summary_table
+    from prsc.runner.report import plot_outcomes, plot_task_outcomes, summary_table, task_table
     from prsc.pipeline.tables import print_table
 
     plot_outcomes(ordered, out / "outcomes.png", title, declared)
+    with_task = any(r.get("task") for r in ordered)
+    if with_task:  # the spec's task (LANGUAGE.md section 8) beside the controller's own outcome
+        plot_task_outcomes(ordered, out / "task_outcomes.png", title, declared)
     report = getattr(controller, "report", None)
     if report is not None:
         report(ordered, scenes, out, title)
     _write_strips(tasks, ordered, out, args.video)
 
     print_table(summary_table(ordered, title, declared))
+    if with_task:
+        print_table(task_table(ordered, title, declared))
     episodes = f"{len(todo)} episodes {finished_at - compiled:.1f} s"
     if todo and args.executor == "local":
         episodes += f", {cpu_used / len(todo):.2f} CPU s each"

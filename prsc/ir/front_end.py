@@ -23,6 +23,7 @@ from prsc.ir.order import order_properties, order_specifiers
 from prsc.ir.scope import (ClassInfo, ConstantInfo, MathModule, ObjectInfo, Scope, SpecModule,
                            VariableInfo, describe, did_you_mean)
 from prsc.ir.specifiers import lower_specifier
+from prsc.ir.task_statements import TASK_NODES, TaskLowering
 from prsc.ir.walk import rebuild, referenced_objects, referenced_variables, specifier_exprs
 from prsc.syntax import nodes
 
@@ -73,6 +74,7 @@ class Compiler(LoopStatements):
         self.variable_objects: dict[str, set[str]] = {}
         self.iterations: tuple[int, ...] = ()  # the iteration number of each enclosing loop
         self.iterations_used = 0
+        self.task_nodes: list[nodes.Statement] = []
 
     # ------------------------------------------------------------ driving
 
@@ -82,7 +84,10 @@ class Compiler(LoopStatements):
         if not main.statements:
             raise PrscError("empty spec: the file has no statements", Span(main.path, 1, 1, 1, 1))
         self._execute(self.graph.main)
+        task = TaskLowering(self.scope, self.objects,
+                            lambda e: ExprResolver(self.scope, self.draws).resolve(e)).statements(self.task_nodes)
         return Program(
+            task=task,
             path=main.path,
             objects=tuple(self.objects),
             variables=tuple(self.variables),
@@ -133,6 +138,8 @@ class Compiler(LoopStatements):
             self._require(s)
         elif isinstance(s, nodes.ExprStmt):
             self._expression_statement(s)
+        elif isinstance(s, TASK_NODES):
+            self.task_nodes.append(s)  # lowered once every object is declared (a task may name any)
         elif isinstance(s, nodes.ForLoop):
             self._loop(s)
         else:  # pragma: no cover

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 from prsc.errors import Span
 from prsc.ir.model import Expr, Specifier
+from prsc.task.terms import TaskStatements
 
 
 @dataclass(frozen=True)
@@ -99,3 +100,4 @@ class Program:
     source_files: tuple[str, ...] = field(default=())  # the spec and every imported file
     # (path, text) of every file read, so later stages quote source text as it was compiled.
     sources: tuple[tuple[str, str], ...] = field(default=(), repr=False, compare=False)
+    task: TaskStatements = field(default_factory=TaskStatements)  # LANGUAGE.md section 8

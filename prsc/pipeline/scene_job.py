@@ -62,6 +62,17 @@ class Job:
 
 # ------------------------------------------------------------------ one scene
 
+TASK_FILE = "task.json"
+
+
+def task_json(scene: dict) -> str | None:
+    """The scene's compiled task as the text of task.json, or None when the spec states no task."""
+    import json
+
+    task = scene.get("task")
+    return None if task is None else json.dumps(task, indent=1, allow_nan=False) + "\n"
+
+
 
 def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda index, target: False
                ) -> tuple[int, dict[str, str], list[str]]:
@@ -91,13 +102,17 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
         return index, files, messages
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        scene = parse_scene(job.scene(index))
+        scene_data = job.scene(index)
+        scene = parse_scene(scene_data)
+        task = task_json(scene_data)
         for target in missing:
             path = root / files[target]
             try:
                 data = TARGETS[target].render()(scene, path, store)
+                # The compiled task (LANGUAGE.md section 8): a bundle holds it as task.json (in place
+                # with the bundle, whole or not at all); the scene JSON holds it under "task".
                 if TARGETS[target].bundle:
-                    atomic_write_tree(path, data)
+                    atomic_write_tree(path, {**data, TASK_FILE: task} if task is not None else data)
                 else:
                     atomic_write(path, data)
                 try:

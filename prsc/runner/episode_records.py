@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from prsc.runner.controller import ControllerRef
 
 DEFAULT_MAX_SIM_SECONDS = 600.0
-RESERVED_KEYS = ("index", "seed", "sim_seconds", "wall_seconds")
+RESERVED_KEYS = ("index", "seed", "sim_seconds", "wall_seconds", "task")
 
 
 @dataclass(frozen=True)
@@ -22,6 +22,7 @@ class EpisodeTask:
     seed: int
     controller: ControllerRef
     max_sim_seconds: float = DEFAULT_MAX_SIM_SECONDS
+    monitor_task: bool = True  # watch the scene's task, when it has one (`prsc bench --episodes --no-task` does not)
 
 
 @dataclass(frozen=True)
@@ -35,11 +36,17 @@ class EpisodeResult:
     sim_seconds: float
     wall_seconds: float
     extra: dict = field(default_factory=dict)
+    # The scene's task over the episode (prsc/task/monitor.py: outcome, trivial, decided_at,
+    # robustness, records), beside the controller's own outcome; None when the scene has no task.
+    task: dict | None = None
 
     def to_json(self) -> dict:
         """The JSON object written to results.jsonl (the controller's keys between reason and the times)."""
-        return {"index": self.index, "seed": self.seed, "outcome": self.outcome, "reason": self.reason,
-                **self.extra, "sim_seconds": self.sim_seconds, "wall_seconds": self.wall_seconds}
+        out = {"index": self.index, "seed": self.seed, "outcome": self.outcome, "reason": self.reason,
+               **self.extra, "sim_seconds": self.sim_seconds, "wall_seconds": self.wall_seconds}
+        if self.task is not None:
+            out["task"] = self.task
+        return out
 
     @classmethod
     def from_json(cls, record: dict) -> EpisodeResult:
@@ -48,4 +55,4 @@ class EpisodeResult:
         return cls(index=int(record["index"]), seed=int(record["seed"]), outcome=str(record["outcome"]),
                    reason=str(record["reason"]), sim_seconds=float(record["sim_seconds"]),
                    wall_seconds=float(record["wall_seconds"]),
-                   extra={k: v for k, v in record.items() if k not in fixed})
+                   extra={k: v for k, v in record.items() if k not in fixed}, task=record.get("task"))

@@ -8,6 +8,7 @@ faults (the file does not load, no GL context) raise InfrastructureError instead
 
 from __future__ import annotations
 
+import contextlib
 import json
 import signal
 import threading
@@ -21,7 +22,8 @@ from prsc.backends.names import with_body_names
 
 from prsc.runner.controller import load_controller
 from prsc.runner.faults import InfrastructureError, SimulationTimeLimit
-from prsc.runner.step_hook import raise_from_signal
+from prsc.runner.step_hook import PeriodicCallback, StepHook, raise_from_signal
+from prsc.runner.task_monitor import CONTROL_PERIOD, TaskMonitor
 from prsc.runner.episode_records import RESERVED_KEYS, EpisodeResult, EpisodeTask
 
 Observer = Callable[[str, mujoco.MjModel, mujoco.MjData], None]
@@ -122,13 +124,22 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
     data = fresh_data(model)
     _observer = observer
     sim_seconds = None  # the time to record, when the watchdog stopped the episode (data.time is past it by a tick)
+    monitor = TaskMonitor(task.scene, model) if task.monitor_task and task.scene.get("task") else None
+    limit = task.max_sim_seconds
+    if monitor is not None and monitor.task.statements.time_limit is not None:
+        limit = min(limit, monitor.task.statements.time_limit)  # `terminate after` bounds the episode
+    # The task is watched from inside the episode's own mj_step (prsc/runner/step_hook.py): the
+    # controller does not co-operate, and its own models (IK, planning) never reach the monitor.
+    hook = StepHook(model, data, [PeriodicCallback(CONTROL_PERIOD, monitor.update)]) if monitor is not None else None
+    finished = True
     try:
-        with _Watchdog(data, task.max_sim_seconds, frame_every)(model):
+        with _Watchdog(data, limit, frame_every)(model), hook or contextlib.nullcontext():
             returned = controller(with_body_names(task.scene), model, data)
         outcome, reason, extra = _interpret(returned)
     except SimulationTimeLimit:
-        outcome, reason, extra = "timeout", f"still running after {task.max_sim_seconds:g} simulated seconds", {}
-        sim_seconds = task.max_sim_seconds  # where it stopped depends on the wall clock: the record must not
+        outcome, reason, extra = "timeout", f"still running after {limit:g} simulated seconds", {}
+        sim_seconds = limit  # where it stopped depends on the wall clock: the record must not
+        finished = False
     except InfrastructureError:
         raise
     except Exception as error:  # the controller's own failure is an outcome, and the campaign goes on
@@ -136,8 +147,17 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         outcome, reason, extra = "error", f"{type(error).__name__}: {message[0] if message else ''}".rstrip(": "), {}
     finally:
         _observer = None
-    if outcome != "timeout" and data.time > task.max_sim_seconds:
-        outcome, reason, extra = "timeout", f"ran {data.time:g} simulated seconds, past the limit of {task.max_sim_seconds:g}", {}
+    if outcome != "timeout" and data.time > limit:
+        outcome, reason, extra = "timeout", f"ran {data.time:g} simulated seconds, past the limit of {limit:g}", {}
+        finished = False
+    task_record = None
+    if monitor is not None:
+        if hook is not None and hook.error is not None:
+            # the monitor failed (a bug, or a task the scene's model cannot answer): the record says so
+            task_record = {"outcome": "error", "trivial": False, "decided_at": None, "robustness": {}, "records": {},
+                           "reason": f"{type(hook.error).__name__}: {hook.error}"}
+        else:
+            task_record = monitor.result(model, data, controller_finished=finished)
     return EpisodeResult(
         index=task.index,
         seed=int(task.seed),
@@ -146,4 +166,5 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         sim_seconds=round(float(data.time if sim_seconds is None else sim_seconds), 3),
         wall_seconds=round(time.perf_counter() - started, 3),
         extra=extra,
+        task=task_record,
     )

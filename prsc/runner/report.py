@@ -61,6 +61,68 @@ def summary_table(records: Sequence[dict], title: str, declared: Sequence[str] =
     return table
 
 
+TASK_OUTCOMES = ("success", "timeout", "incomplete")
+"""The task outcomes besides `fail:LABEL` (LANGUAGE.md section 8), in the order tables list them."""
+
+
+def task_outcome_order(records: Sequence[dict]) -> list[str]:
+    """success, each fail:LABEL seen, timeout, incomplete, then anything else seen (an `error`)."""
+    seen = [r["task"]["outcome"] for r in records if r.get("task")]
+    fails = sorted({o for o in seen if o.startswith("fail:")})
+    return list(dict.fromkeys(["success", *fails, "timeout", "incomplete", *seen]))
+
+
+def task_table(records: Sequence[dict], title: str, declared: Sequence[str] = ()):
+    """A rich Table of the task's outcome against the controller's (episodes with a task), with `trivial`."""
+    from rich.table import Table
+
+    tasked = [r for r in records if r.get("task")]
+    columns = task_outcome_order(tasked)
+    table = Table(title=f"{title}: task outcome (columns) by the controller's outcome (rows)")
+    table.add_column("controller \\ task")
+    for column in columns:
+        table.add_column(column, justify="right")
+    table.add_column("trivial", justify="right")
+    for outcome in outcome_order(tasked, declared):
+        row = [r for r in tasked if r["outcome"] == outcome]
+        if not row and outcome not in declared:
+            continue
+        counts = Counter(r["task"]["outcome"] for r in row)
+        table.add_row(outcome, *(str(counts.get(c, 0)) for c in columns),
+                      str(sum(bool(r["task"].get("trivial")) for r in row)))
+    table.add_section()
+    counts = Counter(r["task"]["outcome"] for r in tasked)
+    table.add_row("total", *(str(counts.get(c, 0)) for c in columns), str(sum(bool(r["task"].get("trivial")) for r in tasked)))
+    return table
+
+
+def plot_task_outcomes(records: Sequence[dict], path: Path, title: str, declared: Sequence[str] = ()) -> Path:
+    """Stacked bars: episodes per controller outcome, split by the task's outcome."""
+    plt = _pyplot()
+    tasked = [r for r in records if r.get("task")]
+    rows = outcome_order(tasked, declared)
+    columns = task_outcome_order(tasked)
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    bottom = np.zeros(len(rows))
+    palette = {"success": "#2ca02c", "timeout": "#7f7f7f", "incomplete": "#bcbd22"}
+    others = ("#d62728", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf")
+    for k, column in enumerate(columns):
+        heights = np.array([sum(1 for r in tasked if r["outcome"] == row and r["task"]["outcome"] == column)
+                            for row in rows], dtype=float)
+        if not heights.any():
+            continue
+        ax.bar(rows, heights, bottom=bottom, label=f"task: {column}", color=palette.get(column, others[k % len(others)]))
+        bottom += heights
+    ax.set_ylabel("episodes")
+    ax.set_xlabel("controller's outcome")
+    ax.set_title(title + " (task outcome stacked)", fontsize=10)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+    plt.close(fig)
+    return path
+
+
 def _pyplot():
     import matplotlib
 

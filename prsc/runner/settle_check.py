@@ -46,6 +46,7 @@ class SceneRest:
     index: int
     largest: float  # metres (0 with no free object)
     drifts: tuple[Drift, ...]  # the objects over the limit, largest first
+    trivial: bool | None = None  # the task's goal holds at the start (None: the spec states no goal)
 
 
 def _frame(obj: SceneObject) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -126,7 +127,19 @@ def settle_scene(raw: dict, mjcf: Path, index: int = 0, seconds: float = SECONDS
         if moved > limit:
             drifts.append(Drift(obj.label or obj.name, moved, cause(scene, obj)))
     drifts.sort(key=lambda d: -d.distance)
-    return SceneRest(index, largest, tuple(drifts))
+    return SceneRest(index, largest, tuple(drifts), _trivial(raw, model))
+
+
+def _trivial(raw: dict, model: mujoco.MjModel) -> bool | None:
+    """Whether the task's goal already holds in the scene as compiled (an episode would be `trivial`)."""
+    if not (raw.get("task") or {}).get("goals"):
+        return None
+    from prsc.runner.harness import fresh_data
+    from prsc.runner.task_monitor import TaskMonitor
+
+    monitor = TaskMonitor(raw, model)
+    monitor.update(model, fresh_data(model))
+    return monitor.monitor.trivial
 
 
 def settle_scenes(scenes: Iterable[tuple[int, Path, Path]], limit: float = LIMIT) -> list[SceneRest]:
@@ -139,10 +152,15 @@ def report_lines(results: list[SceneRest], limit: float = LIMIT) -> list[str]:
     lines = []
     for rest in results:
         mark = "MOVES" if rest.drifts else "at rest"
-        lines.append(f"scene {rest.index:05d}: largest displacement {rest.largest * 1000:.2f} mm ({mark})")
+        lines.append(f"scene {rest.index:05d}: largest displacement {rest.largest * 1000:.2f} mm ({mark})"
+                     + ("; the task's goal already holds at the start (trivial)" if rest.trivial else ""))
         for drift in rest.drifts:
             lines.append(f"  {drift.name} moved {drift.distance * 1000:.1f} mm: {drift.cause}")
     bad = sum(1 for r in results if r.drifts)
     lines.append(f"settle check: {len(results) - bad} of {len(results)} scenes at rest "
                  f"(no free object moved more than {limit * 1000:g} mm in {SECONDS:g} s)")
+    judged = [r for r in results if r.trivial is not None]
+    if judged:
+        lines.append(f"task: the goal already holds at the start of {sum(r.trivial for r in judged)} of {len(judged)} "
+                     "scenes (trivial episodes)")
     return lines

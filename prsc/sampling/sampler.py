@@ -18,6 +18,7 @@ from prsc.constraints.lower import lower_program
 from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir.program import Program
+from prsc.task.bind import bind_task
 from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchedSampler, batch_plan
 from prsc.sampling.candidate_plan import candidate_plan
@@ -216,12 +217,19 @@ class Sampler:
             params = {"ground": True}
             params.update({k: json_value(v) for k, v in values.items()})
             objects = [placed_template(t, p[i], list(q)) for t, p, q in parts]  # type: ignore[arg-type]
-            out.append(scene_dict(spec, seed, int(index), params, objects, classes))
+            out.append(self._with_task(scene_dict(spec, seed, int(index), params, objects, classes)))
         return out
 
     def to_json(self, result: SceneResult, seed: int, index: int) -> dict[str, Any]:
         """The scene JSON of a sampled scene (for callers that also keep its statistics)."""
-        return scene_json(self.spec, int(seed), int(index), result.params, result.objects, self.templates, self.classes)
+        return self._with_task(scene_json(self.spec, int(seed), int(index), result.params, result.objects,
+                                          self.templates, self.classes))
+
+    def _with_task(self, scene: dict[str, Any]) -> dict[str, Any]:
+        """The scene with its compiled task (key "task", LANGUAGE.md section 8) when the spec states one."""
+        if self.program.task:
+            scene["task"] = bind_task(self.program.task, scene).to_json()
+        return scene
 
     def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
         """index -> scene JSON under `seed`; a batched spec draws the next `ahead` indices at once and

@@ -50,6 +50,43 @@ def _indent_token(kind: str, newline: Token, width: int) -> Token:
                  end_line=line, end_column=width + 2, end_pos=newline.end_pos)
 
 
+# LANGUAGE.md section 8: a line that starts with one of these words (not followed by `=`,
+# `.`, `(`, `[` or `,`, which keep it a name) is a task statement, whose words are keywords
+# only there.
+TASK_STATEMENTS = {"goal": "GOAL", "fail": "FAIL", "terminate": "TERMINATE", "record": "RECORD"}
+TASK_WORDS = {"when": "WHEN", "after": "AFTER", "seconds": "SECONDS", "second": "SECONDS", "initial": "RECORD_WHEN",
+              "final": "RECORD_WHEN", "as": "AS", "touches": "TOUCHES", "holds": "HOLDS", "rest": "REST",
+              "upright": "UPRIGHT"}
+TASK_KEYWORDS = {"IN": "T_IN", "ON": "T_ON", "COMPLETELY": "T_COMPLETELY", "AT": "T_AT", "BY": "T_BY",
+                 "VISIBLE": "T_VISIBLE", "AHEAD": "T_AHEAD", "BEHIND": "T_BEHIND", "ABOVE": "T_ABOVE",
+                 "BELOW": "T_BELOW"}
+FACE_DIRECTIONS = {"LEFT": "T_LEFT", "RIGHT": "T_RIGHT"}  # relations only before `of`, face words otherwise
+_KEEP_NAME = {"=", ".", "(", "[", ","}
+
+
+def _with_next(stream: Iterator[Token]) -> Iterator[tuple[Token, Token | None]]:
+    """Each token with the one after it (None at the end)."""
+    previous = None
+    for token in stream:
+        if previous is not None:
+            yield previous, token
+        previous = token
+    if previous is not None:
+        yield previous, None
+
+
+def _task_token(token: Token, following: Token | None) -> Token:
+    """A token of a task statement as the grammar's task rules read it."""
+    kind = token.type
+    if kind == "NAME" and str(token) in TASK_WORDS:
+        kind = TASK_WORDS[str(token)]
+    elif kind in TASK_KEYWORDS:
+        kind = TASK_KEYWORDS[kind]
+    elif kind in FACE_DIRECTIONS and following is not None and str(following) == "of":
+        kind = FACE_DIRECTIONS[kind]
+    return token if kind == token.type else Token.new_borrow_pos(kind, token, token)
+
+
 class Layout(PostLex):
     """The post-lexer: drops continuation newlines and adds indentation tokens."""
 
@@ -64,11 +101,19 @@ class Layout(PostLex):
         self.open_brackets = brackets
         indents = [0]
         last: Token | None = None
-        for token in stream:
+        in_task = False
+        for token, following in _with_next(stream):
             kind = token.type
+            if kind == "NAME" and (last is None or last.type == "_NL") and str(token) in TASK_STATEMENTS and (
+                    following is not None and following.type != "_NL" and str(following) not in _KEEP_NAME):
+                in_task = True
+                token = Token.new_borrow_pos(TASK_STATEMENTS[str(token)], token, token)
+            elif in_task and kind != "_NL":
+                token = _task_token(token, following)
             if kind == "_NL":
                 if brackets or (last is not None and last.type == "COMMA"):
                     continue
+                in_task = False
                 yield token
                 width = _indent_width(token)
                 if width > indents[-1]:

@@ -166,6 +166,20 @@ class RelativeTo(Expr):
     frame: Expr
 
 
+@dataclass(frozen=True)
+class Relation(Expr):
+    """A relation or state word of a task statement (LANGUAGE.md section 8), on the simulated state.
+
+    kind: in, on, left, right, ahead, behind, above, below, touches, holds, at_rest, upright, visible."""
+
+    kind: str
+    subject: Expr
+    target: Expr | None
+    completely: bool = False
+    by: Expr | None = None
+    word_span: Span | None = None
+
+
 # ---------------------------------------------------------------- specifiers
 
 
@@ -335,6 +349,40 @@ class RequireStmt(Statement):
 
     condition: Expr
     probability: Expr | None
+
+
+@dataclass(frozen=True)
+class GoalStmt(Statement):
+    """`goal EXPR [for T seconds]`."""
+
+    condition: Expr
+    hold: Expr | None
+
+
+@dataclass(frozen=True)
+class FailStmt(Statement):
+    """`fail "LABEL" when EXPR`."""
+
+    label: str
+    label_span: Span
+    condition: Expr
+
+
+@dataclass(frozen=True)
+class TerminateStmt(Statement):
+    """`terminate after T seconds`."""
+
+    seconds: Expr
+
+
+@dataclass(frozen=True)
+class RecordStmt(Statement):
+    """`record [initial|final] EXPR as NAME`; when is "initial", "final" or "step"."""
+
+    when: str
+    value: Expr
+    name: str
+    name_span: Span
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,10 @@ _EXPRESSION_START = {"NAME", "NUMBER", "STRING", "LPAR", "LSQB", "LBRACE", "MINU
 _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AHEAD", "BEHIND", "ABOVE",
                     "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE", "STABLY", "VISIBLE", "NOT"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "LSQB", "DEG", "_RELATIVE", "_AND",
-              "_OR"}
+              "_OR",
+              # the relations of a task statement (LANGUAGE.md section 8), re-typed by the layout there only
+              "T_IN", "T_ON", "T_COMPLETELY", "T_AT", "T_VISIBLE", "T_LEFT", "T_RIGHT", "T_AHEAD", "T_BEHIND",
+              "T_ABOVE", "T_BELOW", "TOUCHES", "HOLDS", "UPRIGHT"}
 # A spec is a page of text. This bounds parse time and memory: lark's LALR parser is
 # linear but takes ~30 us and ~0.7 kB per token, so 256 KiB of `1+1+...` parses in ~8 s.
 MAX_SOURCE_BYTES = 256 * 1024
@@ -147,6 +150,9 @@ def _syntax_error(path: str, error: UnexpectedInput) -> PrscError:
             return PrscError("unexpected indentation (only a class or loop body is indented)", span)
         if token.type == "NAME" and "WITH" in expected and "AT" in expected:
             return PrscError(f"unknown specifier '{token}'; expected {_describe_expected(expected)}", span)
+        if "SECONDS" in expected:  # LANGUAGE.md section 8: `for T seconds`, `terminate after T seconds`
+            return PrscError(f"unexpected {_describe_token(token)}; a time is written `T seconds` "
+                             "(the unit is required)", span)
         if "_INDENT" in expected and len(expected) == 1:
             if _opened_by(error) == "FOR":
                 return PrscError("expected an indented loop body (one statement per line)", span)

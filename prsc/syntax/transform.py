@@ -98,6 +98,62 @@ class ToAst(Transformer):
         probability, condition = (exprs[0], exprs[1]) if len(exprs) == 2 else (None, exprs[0])
         return n.RequireStmt(self._span(meta), condition, probability)
 
+    # ------------------------------------------------------------ the task (LANGUAGE.md section 8)
+
+    def goal_stmt(self, meta, children):
+        _goal, condition, _for, hold = children[:4]
+        return n.GoalStmt(self._span(meta), condition, hold)
+
+    def fail_stmt(self, meta, children):
+        _fail, label, _when, condition = children
+        return n.FailStmt(self._span(meta), _decode_string(self.path, label), self._tok(label), condition)
+
+    def terminate_stmt(self, meta, children):
+        return n.TerminateStmt(self._span(meta), self._exprs(children)[0])
+
+    def record_stmt(self, meta, children):
+        _record, when, value, _as, name = children
+        return n.RecordStmt(self._span(meta), str(when) if when is not None else "step", value, str(name),
+                            self._tok(name))
+
+    def _relation(self, meta, kind, subject, target, word, completely=False, by=None):
+        return n.Relation(self._span(meta), kind, subject, target, completely, by, self._tok(word))
+
+    def relation_in(self, meta, children):
+        subject, completely, word, target = children
+        return self._relation(meta, "in", subject, target, word, completely is not None)
+
+    def relation_on(self, meta, children):
+        subject, completely, word, target = children
+        return self._relation(meta, "on", subject, target, word, completely is not None)
+
+    def task_direction(self, meta, children):
+        return children[0]
+
+    def relation_direction(self, meta, children):
+        subject, word, target, _by, amount = children
+        return self._relation(meta, str(word), subject, target, word, by=amount)
+
+    def relation_touches(self, meta, children):
+        subject, word, target = children
+        return self._relation(meta, "touches", subject, target, word)
+
+    def relation_holds(self, meta, children):
+        subject, word, target = children
+        return self._relation(meta, "holds", subject, target, word)
+
+    def relation_at_rest(self, meta, children):
+        subject, word, _rest = children
+        return self._relation(meta, "at_rest", subject, None, word)
+
+    def relation_upright(self, meta, children):
+        subject, word = children
+        return self._relation(meta, "upright", subject, None, word)
+
+    def relation_visible(self, meta, children):
+        subject, word, _from, camera = children
+        return self._relation(meta, "visible", subject, camera, word)
+
     def expr_stmt(self, meta, children):
         return n.ExprStmt(self._span(meta), children[0])
 

@@ -1,0 +1,263 @@
+"""One evaluator of task expressions on a world state: each predicate's truth and robustness in
+metres, the signed distance to where its truth changes (LANGUAGE.md section 8, docs/tasks.md)."""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from prsc.task.regions import (box_corners, box_region, point_polygon_distance, polygon_signed_distance,
+                               prepared_polygon, prism_signed_distance)
+from prsc.task.terms import DIRECTIONS, Task, TaskObject, Term
+from prsc.task.world import Pose, WorldState
+
+REST_SPEED = 0.005  # m/s: `at rest` below this linear speed
+REST_ANGULAR = 0.05  # rad/s: and below this angular speed
+UPRIGHT_ANGLE = math.radians(10.0)  # `upright`: its up axis within this of world z
+ON_GAP = 0.01  # m: `on` rests on the surface within this
+
+
+@dataclass(frozen=True)
+class Truth:
+    """A predicate's value: whether it holds, and its robustness (positive where it holds)."""
+
+    holds: bool
+    robustness: float
+
+
+def support_along(half: np.ndarray, pose: Pose, n: np.ndarray) -> float:
+    """s(n): the box's half-thickness (half extents `half`) along unit n (LANGUAGE.md section 4)."""
+    return float(half @ np.abs(pose.rotation.T @ n))
+
+
+def _norm(v: np.ndarray) -> float:
+    x, y, z = v.tolist()
+    return math.sqrt(x * x + y * y + z * z)
+
+
+def _local(pose: Pose, points: np.ndarray) -> np.ndarray:
+    return (points - pose.position) @ pose.rotation
+
+
+class Evaluator:
+    """Evaluates the terms of one compiled task on world states."""
+
+    def __init__(self, task: Task):
+        self.task = task
+        self.objects = {o.name: o for o in task.objects}
+        self._corners = {o.name: box_corners(o.dimensions) for o in task.objects}
+        self._half = {o.name: np.asarray(o.dimensions, dtype=float) / 2 for o in task.objects}
+        self._boxes = {o.name: box_region(o.dimensions) for o in task.objects}
+        self._supports = {o.name: prepared_polygon(o.support) for o in task.objects}
+        self._compiled: dict[int, tuple[Term, Callable[[WorldState], object]]] = {}
+
+    # ------------------------------------------------------------ values
+    # Each term is turned once into a closure over its children (evaluated at every control step).
+
+    def value(self, term: Term, world: WorldState):
+        """A term's value: Truth for a predicate, else a float or a vector (numpy, 3)."""
+        return self.compiled(term)(world)
+
+    def truth(self, term: Term, world: WorldState) -> Truth:
+        """A predicate's truth and robustness."""
+        return self.compiled(term)(world)
+
+    def compiled(self, term: Term) -> Callable[[WorldState], object]:
+        """The term as a function of the world state (made once per term)."""
+        found = self._compiled.get(id(term))
+        if found is None or found[0] is not term:
+            found = self._compiled[id(term)] = (term, self._compile(term))
+        return found[1]
+
+    def _compile(self, term: Term) -> Callable[[WorldState], object]:
+        op, args, name = term.op, term.args, term.name
+        children = [self.compiled(a) for a in args]
+        if op == "const":
+            value = float(term.value)  # type: ignore[arg-type]
+            return lambda w: value
+        if op == "true":
+            return lambda w: Truth(True, math.inf)
+        if op == "object":
+            return lambda w: w.poses[name].position
+        if op == "attr":
+            return self._compile_attribute(term, children[0])
+        if op == "vector":
+            return lambda w: np.array([_as_number(f(w)) for f in children])
+        if op == "neg":
+            inner = children[0]
+            return lambda w: -inner(w)
+        if op == "arith":
+            left, right = children
+            combine = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": operator.truediv}[name]  # type: ignore[index]
+            return lambda w: combine(left(w), right(w))
+        if op == "distance":
+            first, second = children
+            return lambda w: _norm(np.asarray(first(w), dtype=float) - np.asarray(second(w), dtype=float))
+        if op == "and":
+            def conjunction(w):
+                parts = [f(w) for f in children]
+                return Truth(all(p.holds for p in parts), min(p.robustness for p in parts))
+            return conjunction
+        if op == "or":
+            def disjunction(w):
+                parts = [f(w) for f in children]
+                return Truth(any(p.holds for p in parts), max(p.robustness for p in parts))
+            return disjunction
+        if op == "not":
+            inner = children[0]
+
+            def negation(w):
+                value = inner(w)
+                return Truth(not value.holds, -value.robustness)
+            return negation
+        if op == "compare":
+            first, second = children
+            return lambda w: _compare(name, _as_number(first(w)), _as_number(second(w)))  # type: ignore[arg-type]
+        if term.is_predicate:
+            def relation(w):
+                rho = self.robustness(term, w)
+                return Truth(rho >= 0.0, rho)
+            return relation
+        raise ValueError(f"unknown task term {op!r}")
+
+    def _compile_attribute(self, term: Term, target: Callable[[WorldState], object]) -> Callable[[WorldState], object]:
+        attribute, of = term.name, term.args[0]
+        if of.op == "object":
+            obj = of.name
+            if attribute == "position":
+                return lambda w: w.poses[obj].position
+            if attribute == "speed":
+                return lambda w: _norm(w.poses[obj].linear)
+            if attribute in ("width", "length", "height"):
+                size = self.objects[obj].dimensions[("width", "length", "height").index(attribute)]  # type: ignore[index]
+                return lambda w: size
+        axis = "xyz".index(attribute)  # type: ignore[arg-type]
+        return lambda w: float(target(w)[axis])  # type: ignore[index]
+
+    # ------------------------------------------------------------ predicates
+
+    def robustness(self, term: Term, world: WorldState) -> float:
+        """The robustness of a relation or state word (it holds where it is >= 0)."""
+        op = term.op
+        name = term.args[0].name
+        if op == "touches":
+            return -world.distance(name, term.args[1].name)  # type: ignore[arg-type]
+        obj, pose = self.objects[name], world.poses[name]  # type: ignore[index]
+        if op in ("in", "on"):
+            target = term.args[1].name
+            return self._containment(op, term.completely, obj, pose, self.objects[target], world.poses[target],  # type: ignore[index]
+                                     world, name, target)  # type: ignore[arg-type]
+        if op in DIRECTIONS:
+            other = world.poses[term.args[1].name]  # type: ignore[index]
+            by = _as_number(self.value(term.args[2], world)) if len(term.args) > 2 else 0.0
+            n = other.rotation @ np.asarray(DIRECTIONS[op])
+            return float(n @ (pose.position - other.position)) - by - support_along(self._half[name], pose, n)
+        if op == "at_rest":
+            radius = _norm(self._half[name])
+            return min(REST_SPEED - _norm(pose.linear), radius * (REST_ANGULAR - _norm(pose.angular)))
+        if op == "upright":
+            return UPRIGHT_ANGLE - math.acos(min(1.0, max(-1.0, float(pose.rotation[2, 2]))))
+        if op == "holds":
+            return self._holds(obj, term.args[1].name, world)  # type: ignore[arg-type]
+        if op == "visible":
+            camera = term.args[1].name
+            return self._visible(obj, pose, self.objects[camera], world.poses[camera])  # type: ignore[index]
+        raise ValueError(f"unknown task relation {op!r}")
+
+    def _containment(self, op: str, completely: bool, obj: TaskObject, pose: Pose, target: TaskObject,
+                     target_pose: Pose, world: WorldState, name: str, target_name: str) -> float:
+        points = (pose.position + self._corners[obj.name] @ pose.rotation.T) if completely else pose.position[None]
+        local = _local(target_pose, points)
+        if op == "in" and not target.container:
+            return float(prism_signed_distance(self._boxes[target.name], local).min())
+        surface = target.support
+        up = target_pose.rotation[:, 2]
+        gap = float(up @ (pose.position - target_pose.position)) - surface.high - support_along(self._half[name], pose, up)
+        if completely:
+            over = float(polygon_signed_distance(self._supports[target.name], local[:, :2]).min())
+        else:
+            over = point_polygon_distance(self._supports[target.name], float(local[0, 0]), float(local[0, 1]))
+        return min(ON_GAP - abs(gap), over, -world.distance(name, target_name))
+
+    def _holds(self, robot: TaskObject, held: str, world: WorldState) -> float:
+        if len(robot.fingers) < 2:
+            raise ValueError(f"{robot.name} has no gripper with two finger links")
+        grip = [-world.distance(f"{robot.name}/{finger}", held) for finger in robot.fingers]
+        first, second = sorted(grip, reverse=True)[:2]
+        apart = [world.distance(held, other) for other in self.objects
+                 if other not in (robot.name, held) and self.objects[other].camera is None]
+        return min([first, second] + apart)
+
+    def _visible(self, obj: TaskObject, pose: Pose, camera: TaskObject, camera_pose: Pose) -> float:
+        fovy, aspect = camera.camera  # type: ignore[misc]
+        tan_y = math.tan(math.radians(fovy) / 2)
+        tan_x = tan_y * aspect
+        corners = _local(camera_pose, pose.position + self._corners[obj.name] @ pose.rotation.T)
+        x, y, z = corners[:, 0], corners[:, 1], corners[:, 2]  # the camera looks along its +y, up +z
+        margins = np.stack([(tan_x * y - x) / math.hypot(1, tan_x), (tan_x * y + x) / math.hypot(1, tan_x),
+                            (tan_y * y - z) / math.hypot(1, tan_y), (tan_y * y + z) / math.hypot(1, tan_y), y])
+        return float(margins.min())
+
+
+def every_term(task: Task) -> list[Term]:
+    """Every term of every statement, children before their parents."""
+    out: list[Term] = []
+
+    def walk(term: Term) -> None:
+        for arg in term.args:
+            walk(arg)
+        out.append(term)
+
+    s = task.statements
+    for statement in (*s.goals, *s.failures, *s.records):
+        walk(statement.expr)
+    return out
+
+
+def velocity_objects(task: Task) -> frozenset[str]:
+    """The objects whose velocities the task reads (`at rest`, `.speed`)."""
+    return frozenset(t.args[0].name for t in every_term(task)  # type: ignore[misc]
+                     if t.op == "at_rest" or (t.op == "attr" and t.name == "speed" and t.args[0].op == "object"))
+
+
+def distance_pairs(task: Task) -> list[tuple[str, str]]:
+    """The (object or link, object) pairs whose distance the task reads at every step."""
+    objects = {o.name: o for o in task.objects}
+    out: list[tuple[str, str]] = []
+    for term in every_term(task):
+        names = [a.name for a in term.args if a.op == "object"]
+        if term.op == "touches" or term.op == "on" or (term.op == "in" and objects[names[1]].container):
+            out.append((names[0], names[1]))  # type: ignore[arg-type]
+        elif term.op == "holds":
+            robot, held = objects[names[0]], names[1]  # type: ignore[index]
+            out.extend((f"{robot.name}/{finger}", held) for finger in robot.fingers)  # type: ignore[misc]
+            out.extend((held, other) for other in objects if other not in (robot.name, held)  # type: ignore[misc]
+                       and objects[other].camera is None)
+    return out
+
+
+def _as_number(value) -> float:
+    return float(value.robustness if isinstance(value, Truth) else value)
+
+
+def _compare(op: str, a: float, b: float) -> Truth:
+    if op in ("<", "<="):
+        return Truth(a < b if op == "<" else a <= b, b - a)
+    if op in (">", ">="):
+        return Truth(a > b if op == ">" else a >= b, a - b)
+    if op == "==":
+        return Truth(a == b, -abs(a - b))
+    return Truth(a != b, abs(a - b))
+
+
+def json_value(value) -> object:
+    """A term's value as JSON data (a record): a bool, a number or a list."""
+    if isinstance(value, Truth):
+        return value.holds
+    if isinstance(value, np.ndarray):
+        return [float(v) for v in value]
+    return float(value)

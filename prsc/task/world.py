@@ -1,0 +1,33 @@
+"""The world state at one time, as any simulator gives it: poses, velocities and geom distances."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+DistanceFn = Callable[[str, str], float]
+"""(object or `object/link`, object) -> the minimum signed distance between their geoms in metres
+(negative: penetration; contact: <= 0), capped above at DISTANCE_CAP."""
+
+DISTANCE_CAP = 1.0  # m: a distance above this is reported as this (the robustness of `touches` saturates)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """An object's box centre and rotation (box frame -> world), with its velocities (world frame)."""
+
+    position: np.ndarray
+    rotation: np.ndarray
+    linear: np.ndarray
+    angular: np.ndarray
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """Every object's pose at `time`, and distances between objects' (or links') geoms."""
+
+    time: float
+    poses: Mapping[str, Pose]
+    distance: DistanceFn
