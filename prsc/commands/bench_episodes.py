@@ -6,7 +6,7 @@ Compiles n scenes, runs the first episode to warm the worker (GL context, render
 IK models, MuJoCo's mesh cache), then the other n-1 in this process, as one worker of
 `prsc run` runs them. Reports CPU seconds per episode (process time, all threads: the
 GL rasteriser's too), episodes per CPU-second, and the CPU spent loading MJCF files,
-stepping (`mj_step`) and rendering. A spec with a task (LANGUAGE.md section 8) runs each
+stepping (`mj_step`) and rendering. A spec with a task (docs/tasks.md) runs each
 measured episode twice, with and without the task monitor, interleaved, and reports the
 monitor's share of an episode's CPU.
 """

@@ -35,7 +35,7 @@ def summarise(program) -> str:
     if program.task:
         from prsc.task.describe import describe_statements
 
-        lines.append("  task (LANGUAGE.md section 8):")
+        lines.append("  task (docs/tasks.md):")
         lines.extend(f"    {line}" for line in describe_statements(program.task))
     return "\n".join(lines) + "\n"
 

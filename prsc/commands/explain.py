@@ -168,7 +168,7 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
         from prsc.task.describe import describe_statements
 
         out.append("")
-        out.append("task, evaluated on the simulated state at every control step (LANGUAGE.md section 8):")
+        out.append("task, evaluated on the simulated state at every control step (docs/tasks.md):")
         out.extend(f"  {line}" for line in describe_statements(sampler.program.task))
     return "\n".join(out) + "\n"
 

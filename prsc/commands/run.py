@@ -175,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
 
     plot_outcomes(ordered, out / "outcomes.png", title, declared)
     with_task = any(r.get("task") for r in ordered)
-    if with_task:  # the spec's task (LANGUAGE.md section 8) beside the controller's own outcome
+    if with_task:  # the spec's task (docs/tasks.md) beside the controller's own outcome
         plot_task_outcomes(ordered, out / "task_outcomes.png", title, declared)
     report = getattr(controller, "report", None)
     if report is not None:

@@ -100,4 +100,4 @@ class Program:
     source_files: tuple[str, ...] = field(default=())  # the spec and every imported file
     # (path, text) of every file read, so later stages quote source text as it was compiled.
     sources: tuple[tuple[str, str], ...] = field(default=(), repr=False, compare=False)
-    task: TaskStatements = field(default_factory=TaskStatements)  # LANGUAGE.md section 8
+    task: TaskStatements = field(default_factory=TaskStatements)  # docs/tasks.md

@@ -1,4 +1,4 @@
-"""The task statements of a spec (LANGUAGE.md section 8) lowered to prsc.task terms: names resolved
+"""The task statements of a spec (docs/tasks.md) lowered to prsc.task terms: names resolved
 to objects (a class name: any of its objects), numbers folded, each mistake an error at its place."""
 
 from __future__ import annotations

@@ -109,7 +109,7 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
             path = root / files[target]
             try:
                 data = TARGETS[target].render()(scene, path, store)
-                # The compiled task (LANGUAGE.md section 8): a bundle holds it as task.json (in place
+                # The compiled task (docs/tasks.md): a bundle holds it as task.json (in place
                 # with the bundle, whole or not at all); the scene JSON holds it under "task".
                 if TARGETS[target].bundle:
                     atomic_write_tree(path, {**data, TASK_FILE: task} if task is not None else data)

@@ -62,7 +62,7 @@ def summary_table(records: Sequence[dict], title: str, declared: Sequence[str] =
 
 
 TASK_OUTCOMES = ("success", "timeout", "incomplete")
-"""The task outcomes besides `fail:LABEL` (LANGUAGE.md section 8), in the order tables list them."""
+"""The task outcomes besides `fail:LABEL` (docs/tasks.md), in the order tables list them."""
 
 
 def task_outcome_order(records: Sequence[dict]) -> list[str]:

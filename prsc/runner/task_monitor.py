@@ -1,4 +1,4 @@
-"""The task of a scene (LANGUAGE.md section 8) watched in a MuJoCo episode: the world state read
+"""The task of a scene (docs/tasks.md) watched in a MuJoCo episode: the world state read
 from MjData (poses, velocities, geom distances by MuJoCo's own `mj_geomDistance` after a
 bounding-sphere broad phase), handed to the one evaluator of prsc/task."""
 

@@ -226,7 +226,7 @@ class Sampler:
                                           self.templates, self.classes))
 
     def _with_task(self, scene: dict[str, Any]) -> dict[str, Any]:
-        """The scene with its compiled task (key "task", LANGUAGE.md section 8) when the spec states one."""
+        """The scene with its compiled task (key "task", docs/tasks.md) when the spec states one."""
         if self.program.task:
             scene["task"] = bind_task(self.program.task, scene).to_json()
         return scene

@@ -50,7 +50,7 @@ def _indent_token(kind: str, newline: Token, width: int) -> Token:
                  end_line=line, end_column=width + 2, end_pos=newline.end_pos)
 
 
-# LANGUAGE.md section 8: a line that starts with one of these words (not followed by `=`,
+# docs/tasks.md: a line that starts with one of these words (not followed by `=`,
 # `.`, `(`, `[` or `,`, which keep it a name) is a task statement, whose words are keywords
 # only there.
 TASK_STATEMENTS = {"goal": "GOAL", "fail": "FAIL", "terminate": "TERMINATE", "record": "RECORD"}

@@ -168,7 +168,7 @@ class RelativeTo(Expr):
 
 @dataclass(frozen=True)
 class Relation(Expr):
-    """A relation or state word of a task statement (LANGUAGE.md section 8), on the simulated state.
+    """A relation or state word of a task statement (docs/tasks.md), on the simulated state.
 
     kind: in, on, left, right, ahead, behind, above, below, touches, holds, at_rest, upright, visible."""
 

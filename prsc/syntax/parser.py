@@ -34,7 +34,7 @@ _SPECIFIER_START = {"WITH", "AT", "IN", "ON", "COMPLETELY", "LEFT", "RIGHT", "AH
                     "BELOW", "BEYOND", "ALIGNED", "FACING", "REACHABLE", "STABLY", "VISIBLE", "NOT"}
 _OPERATORS = {"PLUS", "MINUS", "STAR", "SLASH", "COMPARE_OP", "DOT", "LPAR", "LSQB", "DEG", "_RELATIVE", "_AND",
               "_OR",
-              # the relations of a task statement (LANGUAGE.md section 8), re-typed by the layout there only
+              # the relations of a task statement (docs/tasks.md), re-typed by the layout there only
               "T_IN", "T_ON", "T_COMPLETELY", "T_AT", "T_VISIBLE", "T_LEFT", "T_RIGHT", "T_AHEAD", "T_BEHIND",
               "T_ABOVE", "T_BELOW", "TOUCHES", "HOLDS", "UPRIGHT"}
 # A spec is a page of text. This bounds parse time and memory: lark's LALR parser is
@@ -150,7 +150,7 @@ def _syntax_error(path: str, error: UnexpectedInput) -> PrscError:
             return PrscError("unexpected indentation (only a class or loop body is indented)", span)
         if token.type == "NAME" and "WITH" in expected and "AT" in expected:
             return PrscError(f"unknown specifier '{token}'; expected {_describe_expected(expected)}", span)
-        if "SECONDS" in expected:  # LANGUAGE.md section 8: `for T seconds`, `terminate after T seconds`
+        if "SECONDS" in expected:  # docs/tasks.md: `for T seconds`, `terminate after T seconds`
             return PrscError(f"unexpected {_describe_token(token)}; a time is written `T seconds` "
                              "(the unit is required)", span)
         if "_INDENT" in expected and len(expected) == 1:

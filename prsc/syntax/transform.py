@@ -98,7 +98,7 @@ class ToAst(Transformer):
         probability, condition = (exprs[0], exprs[1]) if len(exprs) == 2 else (None, exprs[0])
         return n.RequireStmt(self._span(meta), condition, probability)
 
-    # ------------------------------------------------------------ the task (LANGUAGE.md section 8)
+    # ------------------------------------------------------------ the task (docs/tasks.md)
 
     def goal_stmt(self, meta, children):
         _goal, condition, _for, hold = children[:4]

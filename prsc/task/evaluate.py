@@ -1,5 +1,5 @@
 """One evaluator of task expressions on a world state: each predicate's truth and robustness in
-metres, the signed distance to where its truth changes (LANGUAGE.md section 8, docs/tasks.md)."""
+metres, the signed distance to where its truth changes (docs/tasks.md)."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ class Truth:
 
 
 def support_along(half: np.ndarray, pose: Pose, n: np.ndarray) -> float:
-    """s(n): the box's half-thickness (half extents `half`) along unit n (LANGUAGE.md section 4)."""
+    """s(n): the box's half-thickness (half extents `half`) along unit n (docs/language.md, Specifiers)."""
     return float(half @ np.abs(pose.rotation.T @ n))
 
 

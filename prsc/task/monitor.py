@@ -1,5 +1,5 @@
 """An episode's task over time: goals held for their window, the first failure, the time limit, and
-the records; the outcome and each statement's robustness (LANGUAGE.md section 8)."""
+the records; the outcome and each statement's robustness (docs/tasks.md)."""
 
 from __future__ import annotations
 

@@ -8,14 +8,14 @@ from typing import Any
 
 FORMAT = "prsc-task"
 VERSION = 1
-DEFAULT_HOLD = 0.5  # s: `goal EXPR` without `for` holds this long (LANGUAGE.md section 8)
+DEFAULT_HOLD = 0.5  # s: `goal EXPR` without `for` holds this long (docs/tasks.md)
 
 PREDICATES = frozenset({"and", "or", "not", "compare", "in", "on", "left", "right", "ahead", "behind", "above",
                         "below", "touches", "holds", "at_rest", "upright", "visible", "true"})
 """Term ops whose value is true or false (with a robustness); the others are numbers or vectors."""
 DIRECTIONS = {"left": (-1.0, 0.0, 0.0), "right": (1.0, 0.0, 0.0), "ahead": (0.0, 1.0, 0.0),
               "behind": (0.0, -1.0, 0.0), "above": (0.0, 0.0, 1.0), "below": (0.0, 0.0, -1.0)}
-"""Each direction relation's side as an axis of the target's frame (LANGUAGE.md section 4)."""
+"""Each direction relation's side as an axis of the target's frame (docs/language.md, Specifiers)."""
 
 
 @dataclass(frozen=True)

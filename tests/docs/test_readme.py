@@ -5,7 +5,7 @@ fresh shell's environment without MUJOCO_GL).
 How each block is checked:
 - the untagged block (`make demo`, `make test`): each line names a Makefile target (not run:
   `make test` is the whole suite and `make demo` is CI's own first step);
-- ```prs: it is specs/table_cube.prs as shipped (after its docstring), and it compiles;
+- ```prs: the blocks together are specs/table_cube.prs as shipped (after its docstring), and it compiles;
 - ```console: each `$ ` line runs in bash, exits 0, and the lines shown after it appear in
   what it printed;
 - ```python: runs, and prints what the sentence after the block says it prints;
@@ -53,7 +53,7 @@ def test_the_readme_is_a_front_page():
     lines = README.splitlines()
     assert len(lines) <= 150
     opening = "\n".join(lines[:40])
-    (spec,) = [text for text, _ in _blocks("prs")]
+    spec = _blocks("prs")[0][0]  # the scene; its task follows below the opening
     assert "make demo" in opening and "make test" in opening and f"```prs\n{spec}```" in opening
     assert "docs/img/table_cube_sheet.png" in opening
     assert {lang for lang, _, _ in BLOCKS} <= KINDS, "a block of a kind this test does not run"
@@ -76,7 +76,7 @@ def test_the_two_commands_are_make_targets():
 def test_the_spec_is_the_shipped_one_and_compiles(tmp_path):
     from prsc.ir import compile_program
 
-    (block,) = [text for text, _ in _blocks("prs")]
+    block = "\n".join(text for text, _ in _blocks("prs"))  # the scene, then its task
     shipped = (REPO / "specs" / "table_cube.prs").read_text(encoding="utf-8")
     assert re.sub(r'^""".*?"""', "", shipped, count=1, flags=re.S).strip() == block.strip()
     spec = tmp_path / "first.prs"
