@@ -282,7 +282,7 @@ def test_steps_give_no_scene_and_truncate_at_max_episode_steps():
     assert info["scene"]["index"] == 0
     outcomes = [env.step(env.action_space.sample()) for _ in range(3)]
     assert [truncated for *_, truncated, _ in outcomes] == [False, False, True]
-    assert all(info == {} for *_, info in outcomes)
+    assert all("scene" not in info for *_, info in outcomes)  # the task's status only (Table-Cube states one)
     env.reset()
     assert not env.step(env.action_space.sample())[3]  # the count starts again
 
