@@ -12,7 +12,7 @@ import json
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import mujoco
@@ -22,6 +22,7 @@ from prsc.backends.names import with_body_names
 from prsc.runner.controller import load_controller
 from prsc.runner.faults import InfrastructureError, SimulationTimeLimit
 from prsc.runner.episode_records import RESERVED_KEYS, EpisodeResult, EpisodeTask
+from prsc.runner.step_hook import PeriodicCallback, StepHook
 
 Observer = Callable[[str, mujoco.MjModel, mujoco.MjData], None]
 _observer: Observer | None = None
@@ -112,8 +113,10 @@ class _Watchdog:
             signal.signal(signal.SIGALRM, self._previous)
 
 
-def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every: float | None = None) -> EpisodeResult:
-    """Run one episode of the task's controller and classify it; infrastructure faults raise."""
+def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every: float | None = None,
+                step_callbacks: Sequence[PeriodicCallback] = ()) -> EpisodeResult:
+    """Run one episode of the task's controller and classify it; infrastructure faults raise.
+    `step_callbacks` watch the episode's own data from inside mj_step (a dataset recorder)."""
     global _observer
     started = time.perf_counter()
     controller = load_controller(task.controller)
@@ -121,8 +124,9 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
     data = fresh_data(model)
     _observer = observer
     sim_seconds = None  # the time to record, when the watchdog stopped the episode (data.time is past it by a tick)
+    hook = StepHook(model, data, step_callbacks)
     try:
-        with _Watchdog(data, task.max_sim_seconds, frame_every)(model):
+        with _Watchdog(data, task.max_sim_seconds, frame_every)(model), hook:
             returned = controller(with_body_names(task.scene), model, data)
         outcome, reason, extra = _interpret(returned)
     except SimulationTimeLimit:
@@ -135,6 +139,8 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         outcome, reason, extra = "error", f"{type(error).__name__}: {message[0] if message else ''}".rstrip(": "), {}
     finally:
         _observer = None
+    if hook.error is not None and not isinstance(hook.error, SimulationTimeLimit):  # the limit's tick may land in a callback
+        raise InfrastructureError(f"a step callback failed: {type(hook.error).__name__}: {hook.error}")
     if outcome != "timeout" and data.time > task.max_sim_seconds:
         outcome, reason, extra = "timeout", f"ran {data.time:g} simulated seconds, past the limit of {task.max_sim_seconds:g}", {}
     return EpisodeResult(

@@ -1,0 +1,66 @@
+"""robomimic's HDF5 layout with h5py (docs/datasets.md):
+
+    demo.hdf5   data/demo_K  -> an HDF5 external link to demos/demo_K.hdf5:/demo
+                data.attrs: total (frames), env_args (JSON)
+    demos/demo_K.hdf5   /demo: actions (T, A), states (T, S: MuJoCo's integration state),
+                        rewards (T,), dones (T,), obs/state, obs/object, obs/<camera>_image
+                        (T, H, W, 3 uint8); attrs num_samples, model_file (the MJCF text) and
+                        prsc's own (scene JSON, seed, scene index, spec hash, outcome)
+
+h5py (and robomimic through it) reads a linked group as if it were in demo.hdf5. Each
+episode's file is written once, whole; demo.hdf5 is small and replaced atomically after
+every episode, so a killed recording is a readable file of the episodes before the kill.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+
+INDEX_FILE = "demo.hdf5"
+DEMO_FILE = "demos/demo_{episode}.hdf5"
+DEMO_GROUP = "/demo"
+
+
+def episode_file(columns: dict[str, np.ndarray], images: dict[str, np.ndarray], names: dict[str, list[str]],
+                 attrs: dict[str, object]) -> bytes:
+    """One episode's HDF5 file (group /demo) as bytes."""
+    import h5py
+
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w", track_order=False) as f:
+        demo = f.create_group("demo")
+
+        def put(group, name, values, **kwargs):
+            group.create_dataset(name, data=values, track_times=False, **kwargs)
+
+        put(demo, "actions", columns["action"].astype(np.float64))
+        put(demo, "states", columns["mujoco.state"])
+        put(demo, "rewards", columns["next.reward"].astype(np.float64))
+        put(demo, "dones", columns["next.done"].astype(np.int64))
+        put(demo, "success", columns["next.success"].astype(np.int64))
+        obs = demo.create_group("obs")
+        put(obs, "state", columns["observation.state"].astype(np.float64))
+        put(obs, "object", columns["observation.environment_state"])
+        for camera, frames in images.items():
+            put(obs, f"{camera}_image", frames, compression="gzip", compression_opts=4, chunks=(1, *frames.shape[1:]))
+        for key, value in names.items():
+            demo.attrs[f"{key}_names"] = json.dumps(value)
+        demo.attrs["num_samples"] = len(columns["action"])
+        for key, value in attrs.items():
+            demo.attrs[key] = value
+    return buffer.getvalue()
+
+
+def write_index(path, demos: list[tuple[str, int]], env_args: dict) -> None:
+    """demo.hdf5 at `path` (written in place: the caller renames it): data/demo_K linked to each episode's file."""
+    import h5py
+
+    with h5py.File(path, "w") as f:
+        data = f.create_group("data")
+        for k, (file, _) in enumerate(demos):
+            data[f"demo_{k}"] = h5py.ExternalLink(file, DEMO_GROUP)
+        data.attrs["total"] = int(sum(n for _, n in demos))
+        data.attrs["env_args"] = json.dumps(env_args)
