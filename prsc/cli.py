@@ -15,7 +15,7 @@ from prsc.errors import PrscError, format_error
 
 # Each module in prsc.commands exposes `add_parser(subparsers)` and `run(args) -> int`.
 # Imported lazily so `prsc check` does not pay for mujoco, pxr or pybullet.
-COMMANDS = ("check", "explain", "sample", "compile", "run", "falsify", "bench", "preview", "reach")
+COMMANDS = ("check", "explain", "sample", "compile", "run", "replay", "falsify", "bench", "preview", "reach")
 DESCRIPTION = (
     "prsc: a compiler for probabilistic 3D scene specifications (.prs). It samples scenes that "
     "satisfy a spec's constraints exactly and writes them for simulators (MJCF, URDF, SDF, USD). "
