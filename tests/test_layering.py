@@ -82,7 +82,7 @@ def _graph() -> dict[str, tuple[set[str], set[str]]]:
     return graph
 
 
-API = {"prsc.scenario", "prsc.scene_env"}  # the library API (prsc.load, SceneEnv): sampling + backends
+API = {"prsc.scenario", "prsc.scene_env", "prsc.record_episodes"}  # the library API (prsc.load, SceneEnv, RecordEpisodes)
 
 
 def _layer(module: str) -> str:

@@ -112,7 +112,7 @@ def encode_episode(frames: EpisodeFrames, settings: RecordSettings, scene: dict,
         scene_index=int(scene.get("index", 0)), scene=scene, seed=int(scene.get("seed", 0)),
         result={k: v for k, v in result.items() if k != "wall_seconds"}, task=settings.task or task_text(scene),
         names=names, state_size=layout.state_size,
-        cameras=[{"name": c.name, "width": c.width, "height": c.height} for c in layout.cameras],
+        cameras=[{"name": c.name, "width": c.width, "height": c.height} for c in layout.cameras if settings.images],
         columns=columns, model_name=model_name, model_text=text, model_source=mjcf_path, model_binary=model_binary)
     images = {c.name: frames.image_stack(c.name) for c in layout.cameras if frames.images.get(c.name)}
     if settings.format == "lerobot":

@@ -178,6 +178,7 @@ class EpisodeFrames:
     mujoco_states: list[np.ndarray] = field(default_factory=list)
     statuses: list[Any] = field(default_factory=list)
     images: dict[str, list[np.ndarray]] = field(default_factory=dict)
+    values: list[tuple[float, bool, bool]] | None = None  # (reward, done, success) given per frame, not from statuses
 
     def __len__(self) -> int:
         return len(self.times)
@@ -185,7 +186,7 @@ class EpisodeFrames:
     def columns(self) -> dict[str, np.ndarray]:
         """The per-frame arrays, named as the LeRobot features (images apart)."""
         n = len(self)
-        values = [task_values(s, k == n - 1) for k, s in enumerate(self.statuses)]
+        values = self.values if self.values is not None else [task_values(s, k == n - 1) for k, s in enumerate(self.statuses)]
         layout = self.layout
         return {
             "observation.state": np.array(self.states, dtype=np.float32).reshape(n, len(layout.state_names)),

@@ -210,3 +210,31 @@ def test_bad_input_is_refused_and_nothing_recorded_is_touched(out, lerobot_datas
                  "--record", str(tmp_path / "ds")])
     assert code == 2 and "no camera object" in capsys.readouterr().err
     assert not (tmp_path / "ds").exists()
+
+
+def test_record_episodes_wraps_a_scene_env_of_a_users_policy(tmp_path):
+    gymnasium = pytest.importorskip("gymnasium")
+    import prsc
+
+    folder = tmp_path / "gym"
+    env = prsc.RecordEpisodes(prsc.SceneEnv(SPEC, render_mode="rgb_array", frame_skip=50), folder, lossless=True)
+    for episode in range(2):
+        env.reset(seed=0) if episode == 0 else env.reset()
+        for _ in range(4):
+            env.step(env.unwrapped.data.ctrl + 0.05)
+    env.close()
+    info = check_lerobot_layout(folder, 2)
+    assert info["fps"] == 10 and info["total_frames"] == 8  # 50 steps of 2 ms a frame
+    from prsc.runner.demo_replay import replay
+
+    report = replay(folder, 1)
+    assert report.position_error <= 1e-9 and report.image_error == {"camera": 0.0}
+    data = pq.read_table(folder / "data/chunk-000/file-001.parquet")
+    actions = np.array(data.column("action").to_pylist())
+    assert np.all(np.diff(actions[:, 0]) > 0.04)  # each step's action, as sent
+    from gymnasium.utils.env_checker import check_env
+
+    checked = prsc.RecordEpisodes(prsc.SceneEnv(SPEC, frame_skip=50), tmp_path / "checked", images=False)
+    check_env(checked, skip_render_check=True)
+    checked.close()
+    assert isinstance(checked, gymnasium.Wrapper) and (tmp_path / "checked" / "meta/info.json").is_file()
