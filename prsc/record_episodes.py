@@ -32,7 +32,8 @@ class RecordEpisodes(gymnasium.Wrapper):
         super().__init__(env)
         import mujoco
 
-        from prsc.runner.demo_dataset import DemoDataset, RecordSettings
+        from prsc.runner.demo_dataset import DemoDataset
+        from prsc.runner.episode_records import RecordSettings
 
         base = env.unwrapped
         if not hasattr(base, "spec_path") or not hasattr(base, "frame_skip"):
@@ -49,7 +50,7 @@ class RecordEpisodes(gymnasium.Wrapper):
         key = {"command": "RecordEpisodes", "spec": str(base.spec_path),
                "spec_sha256": hashlib.sha256(Path(base.spec_path).read_bytes()).hexdigest(), "format": format, "fps": self.settings.fps,
                "images": images, "lossless": lossless, "frame_skip": base.frame_skip}
-        env_args = {"env_name": "prsc/SceneEnv-v0", "type": "prsc", "env_kwargs": {
+        env_args = {"env_name": "prsc/SceneEnv-v0", "type": 2, "env_kwargs": {
             "spec": key["spec"], "frame_skip": base.frame_skip}}
         self.dataset = DemoDataset(Path(root), key, keep, env_args).open()
         self._mujoco = mujoco

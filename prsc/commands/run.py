@@ -136,8 +136,10 @@ def _open_dataset(args: argparse.Namespace, key: dict, tasks: list, scenes: list
         raise PrscError(f"--record: {args.file} has no camera object for images; add one "
                         "(e.g. `Camera at Vector3D(0, -1, 1.5), with resolution [128, 128]`) or pass --no-images")
     record_key = {**key, "format": args.format, "fps": args.fps, "images": args.images, "lossless": args.lossless}
-    env_args = {"env_name": Path(args.file).stem, "type": "prsc", "env_kwargs": {
-        "spec": str(args.file), "seed": args.seed, "controller": args.controller, "fps": args.fps}}
+    # robomimic's env_args: a Gymnasium env (its type 2) that steps a frame at a time: prsc.SceneEnv
+    env_args = {"env_name": "prsc/SceneEnv-v0", "type": 2, "env_kwargs": {
+        "spec": str(args.file), "frame_skip": max(1, round(1.0 / (args.fps * timestep)))},
+        "prsc": {"seed": args.seed, "controller": args.controller, "fps": args.fps}}
     return DemoDataset(args.record, record_key, args.keep, env_args).open()
 
 
@@ -148,6 +150,10 @@ def run(args: argparse.Namespace) -> int:
 
     # Before anything imports mujoco: MuJoCo fixes its GL backend at import.
     gl_backend = choose_gl_backend()
+    if args.record is not None:
+        from prsc.runner.demo_dataset import require_libraries
+
+        require_libraries()  # before anything is compiled
     from rich.console import Console
 
     from prsc.runner.controller import declared_outcomes, load_controller, parse_target
@@ -200,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
         console.print(f"resuming: {len(kept)} of {len(tasks)} episodes already in {out / RESULTS}")
     record_settings = None
     if dataset is not None:
-        from prsc.runner.demo_dataset import RecordSettings
+        from prsc.runner.episode_records import RecordSettings
 
         record_settings = RecordSettings(args.format, args.fps, lossless=args.lossless, images=args.images)
     progress = progress_bar(len(todo), "episodes", "episodes")

@@ -28,6 +28,7 @@ from prsc.errors import PrscError
 from prsc.runner import lerobot_format as lerobot
 from prsc.runner import robomimic_format as robomimic
 from prsc.runner.demo_frames import EpisodeFrames
+from prsc.runner.episode_records import RecordSettings
 
 FORMATS = ("lerobot", "robomimic")
 KEEP = ("all", "success")
@@ -36,17 +37,6 @@ LOCK_FILE = ".prsc-dataset-lock"
 SCRATCH = ".prsc-scratch"  # files being written, outside the folders a reader globs
 MODELS = "models"
 _ASSET_REFERENCE = re.compile(r'file="\.\./assets/([^"]+)"')
-
-
-@dataclass(frozen=True)
-class RecordSettings:
-    """How a campaign records: format, frames per simulated second, lossless video, the task text."""
-
-    format: str
-    fps: int
-    lossless: bool = False
-    images: bool = True  # render every camera object of the scene
-    task: str = ""
 
 
 @dataclass
@@ -82,6 +72,18 @@ class RecordedEpisode:
 
     def __len__(self) -> int:
         return len(self.columns["next.done"])
+
+
+def require_libraries() -> None:
+    """PrscError unless pyarrow, PyAV and h5py import (the [datasets] extra)."""
+    missing = []
+    for name in ("pyarrow", "av", "h5py"):
+        try:
+            __import__(name)
+        except ImportError:
+            missing.append(name)
+    if missing:
+        raise PrscError(f"recording a dataset needs {', '.join(missing)}: pip install 'prsc[datasets]'")
 
 
 def task_text(scene: dict) -> str:
@@ -168,6 +170,7 @@ class DemoDataset:
             raise PrscError(f"--format must be one of {', '.join(FORMATS)}, got {key.get('format')!r}")
         if keep not in KEEP:
             raise PrscError(f"--keep must be one of {', '.join(KEEP)}, got {keep!r}")
+        require_libraries()
         self.root = Path(root)
         self.key = dict(key, keep=keep)
         self.format = key["format"]

@@ -4,10 +4,12 @@
                 data.attrs: total (frames), env_args (JSON)
     demos/demo_K.hdf5   /demo: actions (T, A), states (T, S: MuJoCo's integration state),
                         rewards (T,), dones (T,), obs/state, obs/object, obs/<camera>_image
-                        (T, H, W, 3 uint8); attrs num_samples, model_file (the MJCF text) and
-                        prsc's own (scene JSON, seed, scene index, spec hash, outcome)
+                        (T, H, W, 3 uint8), next_obs/... (the next frame's, the last repeated:
+                        robomimic's default config reads them); attrs num_samples, model_file
+                        (the MJCF text) and prsc's own (scene JSON, seed, scene index, outcome)
 
-h5py (and robomimic through it) reads a linked group as if it were in demo.hdf5. Each
+h5py (and robomimic through it, which opens files for SWMR reading: both are written with
+libver "latest") reads a linked group as if it were in demo.hdf5. Each
 episode's file is written once, whole; demo.hdf5 is small and replaced atomically after
 every episode, so a killed recording is a readable file of the episodes before the kill.
 """
@@ -30,7 +32,7 @@ def episode_file(columns: dict[str, np.ndarray], images: dict[str, np.ndarray], 
     import h5py
 
     buffer = io.BytesIO()
-    with h5py.File(buffer, "w", track_order=False) as f:
+    with h5py.File(buffer, "w", libver="latest") as f:
         demo = f.create_group("demo")
 
         def put(group, name, values, **kwargs):
@@ -41,11 +43,17 @@ def episode_file(columns: dict[str, np.ndarray], images: dict[str, np.ndarray], 
         put(demo, "rewards", columns["next.reward"].astype(np.float64))
         put(demo, "dones", columns["next.done"].astype(np.int64))
         put(demo, "success", columns["next.success"].astype(np.int64))
-        obs = demo.create_group("obs")
-        put(obs, "state", columns["observation.state"].astype(np.float64))
-        put(obs, "object", columns["observation.environment_state"])
-        for camera, frames in images.items():
-            put(obs, f"{camera}_image", frames, compression="gzip", compression_opts=4, chunks=(1, *frames.shape[1:]))
+        observations = {"state": columns["observation.state"].astype(np.float64),
+                        "object": columns["observation.environment_state"],
+                        **{f"{camera}_image": frames for camera, frames in images.items()}}
+        for group, shift in (("obs", 0), ("next_obs", 1)):
+            target = demo.create_group(group)
+            for key, values in observations.items():
+                values = np.concatenate([values[shift:], values[-1:]]) if shift else values
+                if values.dtype == np.uint8:
+                    put(target, key, values, compression="gzip", compression_opts=4, chunks=(1, *values.shape[1:]))
+                else:
+                    put(target, key, values)
         for key, value in names.items():
             demo.attrs[f"{key}_names"] = json.dumps(value)
         demo.attrs["num_samples"] = len(columns["action"])
@@ -58,7 +66,7 @@ def write_index(path, demos: list[tuple[str, int]], env_args: dict) -> None:
     """demo.hdf5 at `path` (written in place: the caller renames it): data/demo_K linked to each episode's file."""
     import h5py
 
-    with h5py.File(path, "w") as f:
+    with h5py.File(path, "w", libver="latest") as f:
         data = f.create_group("data")
         for k, (file, _) in enumerate(demos):
             data[f"demo_{k}"] = h5py.ExternalLink(file, DEMO_GROUP)

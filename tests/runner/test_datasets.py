@@ -171,10 +171,11 @@ def test_a_killed_recording_is_a_dataset_and_resumes_to_the_uninterrupted_one(ou
 def test_robomimic_keeps_the_successes_with_robomimic_keys(out):
     code, folder = record(out, "robomimic", "--format", "robomimic", "--keep", "success")
     assert code == 0
-    with h5py.File(folder / "demo.hdf5", "r") as f:
+    with h5py.File(folder / "demo.hdf5", "r", swmr=True, libver="latest") as f:  # as robomimic opens it
         assert sorted(f["data"]) == ["demo_0", "demo_1"]  # scenes 0 and 2: scene 1 failed
         assert f["data"].attrs["total"] == 2 * FRAMES
-        assert json.loads(f["data"].attrs["env_args"])["env_name"] == "panda_camera"
+        env_args = json.loads(f["data"].attrs["env_args"])
+        assert env_args["type"] == 2 and env_args["env_kwargs"] == {"spec": SPEC, "frame_skip": 50}
         for name in ("demo_0", "demo_1"):
             demo = f["data"][name]
             assert demo.attrs["num_samples"] == FRAMES and demo.attrs["model_file"].startswith("<mujoco")
@@ -183,6 +184,8 @@ def test_robomimic_keeps_the_successes_with_robomimic_keys(out):
             assert demo["obs/camera_image"].shape == (FRAMES, 64, 64, 3) and demo["obs/camera_image"].dtype == np.uint8
             assert demo["obs/state"].shape == (FRAMES, len(json.loads(demo.attrs["state_names"])))
             assert demo["obs/object"].shape == (FRAMES, 7)
+            assert set(demo["next_obs"]) == set(demo["obs"])
+            assert np.array_equal(demo["next_obs/camera_image"][:-1], demo["obs/camera_image"][1:])
         assert json.loads(f["data/demo_1"].attrs["prsc_scene"])["index"] == 2
     from prsc.runner.demo_replay import replay
 
@@ -238,3 +241,32 @@ def test_record_episodes_wraps_a_scene_env_of_a_users_policy(tmp_path):
     check_env(checked, skip_render_check=True)
     checked.close()
     assert isinstance(checked, gymnasium.Wrapper) and (tmp_path / "checked" / "meta/info.json").is_file()
+
+
+def _lerobot_python() -> str | None:
+    """A Python with lerobot: $PRSC_LEROBOT_PYTHON (make lerobot-check sets it), else this one when it has lerobot."""
+    import importlib.util
+
+    given = os.environ.get("PRSC_LEROBOT_PYTHON")
+    if given:
+        return given
+    return sys.executable if importlib.util.find_spec("lerobot") is not None else None
+
+
+@pytest.mark.skipif(_lerobot_python() is None, reason="lerobot is not installed (make lerobot-check installs it)")
+def test_lerobot_loads_the_dataset_and_decodes_a_fresh_render(lerobot_dataset, tmp_path):
+    item = FRAMES + 3  # episode 1, frame 3
+    frame = tmp_path / "frame.npy"
+    done = subprocess.run([_lerobot_python(), str(DATA / "lerobot_load.py"), str(lerobot_dataset), "--item", str(item),
+                           "--frame", str(frame)], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert report["episodes"] == EPISODES and report["frames"] == report["length"] == EPISODES * FRAMES
+    assert report["lengths"] == [FRAMES] * EPISODES and report["tasks"] == ["panda_camera"]
+    info = json.loads((lerobot_dataset / "meta/info.json").read_text())
+    assert report["features"] == {k: [f["dtype"], f["shape"]] for k, f in info["features"].items()}
+    assert report["item"]["episode_index"] == 1 and report["item"]["frame_index"] == 3 and report["item"]["index"] == item
+    from prsc.runner.demo_replay import replay
+
+    fresh = replay(lerobot_dataset, 1).replayed["camera"][3]  # the stored state, rendered again
+    assert np.array_equal(np.load(frame), fresh)
