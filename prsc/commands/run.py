@@ -199,7 +199,8 @@ def run(args: argparse.Namespace) -> int:
     dataset = _open_dataset(args, key, tasks, scenes) if args.record is not None else None
     results = Results(out, key)
     # with --record, an episode is done once the dataset holds it (or left it out by --keep)
-    kept = {k: r for k, r in results.recorded().items() if k < (len(tasks) if dataset is None else dataset.processed)}
+    done = len(tasks) if dataset is None else min(len(tasks), dataset.processed)
+    kept = {k: r for k, r in results.recorded().items() if k < done}
     todo = [t for t in tasks if t.index not in kept]
     results.begin(kept)
     if kept:

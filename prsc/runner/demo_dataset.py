@@ -395,3 +395,7 @@ class DemoDataset:
                     path.unlink()
         if count:
             self._write_meta()
+        else:  # killed in the first commit: no metadata may list an episode
+            for rel in ("meta/info.json", "meta/stats.json", "meta/tasks.parquet", robomimic.INDEX_FILE):
+                (self.root / rel).unlink(missing_ok=True)
+            shutil.rmtree(self.root / "meta/episodes", ignore_errors=True)

@@ -162,6 +162,11 @@ def test_a_killed_recording_is_a_dataset_and_resumes_to_the_uninterrupted_one(ou
     done = json.loads(state.read_text())["processed"]
     assert 1 <= done <= EPISODES
     check_lerobot_layout(folder, done)  # a finished dataset of the episodes before the kill
+    if _lerobot_python() is not None:  # and lerobot reads it so
+        loaded = subprocess.run([_lerobot_python(), str(DATA / "lerobot_load.py"), str(folder)],
+                                capture_output=True, text=True, timeout=600)
+        assert loaded.returncode == 0, loaded.stderr[-2000:]
+        assert json.loads(loaded.stdout.strip().splitlines()[-1])["episodes"] == done
     assert subprocess.run(command, capture_output=True).returncode == 0  # the same command resumes
     check_lerobot_layout(folder, EPISODES)
     for pattern in ("data/*/*.parquet", "meta/episodes/*/*.parquet", "meta/*.json", "videos/*/*/*.mp4"):
