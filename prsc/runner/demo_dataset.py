@@ -211,6 +211,8 @@ class DemoDataset:
             else:
                 self.processed = int(stored["processed"])
                 self.episodes = list(stored["episodes"])
+                if self.format == "lerobot":
+                    self._read_stats()
                 self._repair()
         return self
 
@@ -226,9 +228,8 @@ class DemoDataset:
     def close(self) -> None:
         """Unlock the folder."""
         if self._lock is not None:
-            os.close(self._lock)
+            os.close(self._lock)  # the file stays: unlinking it would let a run that opened it lock a ghost
             self._lock = None
-            (self.root / LOCK_FILE).unlink(missing_ok=True)
 
     # ------------------------------------------------------------ adding episodes
     def add(self, episode: RecordedEpisode | None, scene_index: int) -> None:
@@ -245,8 +246,10 @@ class DemoDataset:
                 ready.drop_payload()  # an executor may hold the object until the campaign ends
 
     def _save_state(self) -> None:
+        # the episodes' statistics are in meta/episodes (read back on opening), not rewritten here
+        episodes = [{k: v for k, v in e.items() if k != "stats"} for e in self.episodes]
         _put(self.root, self.root / STATE_FILE, json.dumps({"key": self.key, "processed": self.processed,
-                                                          "episodes": self.episodes}, indent=1) + "\n")
+                                                          "episodes": episodes}, indent=1) + "\n")
 
     def _commit(self, episode: RecordedEpisode) -> None:
         number = len(self.episodes)
@@ -376,6 +379,24 @@ class DemoDataset:
         robots = sorted({n.split("/")[0] for n in self.episodes[0]["names"]["state"]})
         info = lerobot.info_json(features, self.key["fps"], len(self.episodes), start, len(tasks), "+".join(robots) or "none")
         _put(self.root, self.root / "meta/info.json", json.dumps(info, indent=4) + "\n")
+
+    def _read_stats(self) -> None:
+        """Each committed episode's statistics, from its meta/episodes row."""
+        import pyarrow.parquet as pq
+
+        rows: list[dict] = []
+        for path in sorted((self.root / "meta/episodes").glob("*/*.parquet")):
+            rows += pq.read_table(path).to_pylist()
+        if len(rows) < len(self.episodes):
+            raise PrscError(f"{self.root}/meta/episodes lists {len(rows)} episodes, {STATE_FILE} {len(self.episodes)}; "
+                            "the dataset is damaged: record into another folder")
+        for entry, row in zip(self.episodes, rows):
+            stats: dict[str, dict] = {}
+            for column, value in row.items():
+                if column.startswith("stats/"):
+                    feature, _, name = column[len("stats/"):].rpartition("/")
+                    stats.setdefault(feature, {})[name] = value
+            entry["stats"] = stats
 
     # ------------------------------------------------------------ after a hard kill
     def _repair(self) -> None:
