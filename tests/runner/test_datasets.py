@@ -145,7 +145,7 @@ def test_two_jobs_write_the_same_dataset(out, lerobot_dataset):
 def test_a_killed_recording_is_a_dataset_and_resumes_to_the_uninterrupted_one(out, lerobot_dataset):
     folder = out / "killed"
     command = [sys.executable, "-m", "prsc.cli", "run", SPEC, "--controller", WAVE, "-n", str(EPISODES),
-               "-o", str(out / "run_killed"), "--record", str(folder), "--fps", str(FPS), "--lossless"]
+               "-o", str(out / "run"), "--record", str(folder), "--fps", str(FPS), "--lossless"]  # scenes compiled
     process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                env=dict(os.environ, MUJOCO_GL=os.environ.get("MUJOCO_GL", "egl")))
     deadline = time.monotonic() + 240
@@ -205,9 +205,9 @@ def _snapshot(root: Path) -> dict[str, str]:
 
 def test_bad_input_is_refused_and_nothing_recorded_is_touched(out, lerobot_dataset, tmp_path, capsys):
     before = _snapshot(lerobot_dataset)
-    for extra, message in ((["--seed", "1"], "another recording: seed"),
-                           (["--format", "robomimic"], "another recording: format")):
-        code, _ = record(out, "lerobot", "--lossless", *extra, run=f"run_{extra[-1]}")
+    for extra, message, run in ((["--seed", "1"], "another recording: seed", "run_seed1"),
+                                (["--format", "robomimic"], "another recording: format", "run")):
+        code, _ = record(out, "lerobot", "--lossless", *extra, run=run)
         assert code == 2 and message in capsys.readouterr().err
     assert _snapshot(lerobot_dataset) == before
     code, _ = record(out, "too_fast", "--fps", "1000")
