@@ -333,7 +333,7 @@ class DemoDataset:
     # ------------------------------------------------------------ metadata
     def _write_meta(self) -> None:
         if self.format == "robomimic":
-            demos = [(robomimic.DEMO_FILE.format(episode=k), e["frames"]) for k, e in enumerate(self.episodes)]
+            demos = [(robomimic.DEMO_FILE.format(episode=k), e["frames"], e["success"]) for k, e in enumerate(self.episodes)]
             _put(self.root, self.root / robomimic.INDEX_FILE,
                  writer=lambda temporary: robomimic.write_index(temporary, demos, self.env_args))
             return

@@ -1,7 +1,7 @@
 """robomimic's HDF5 layout with h5py (docs/datasets.md):
 
     demo.hdf5   data/demo_K  -> an HDF5 external link to demos/demo_K.hdf5:/demo
-                data.attrs: total (frames), env_args (JSON)
+                data.attrs: total (frames), env_args (JSON); mask/successful (a filter key)
     demos/demo_K.hdf5   /demo: actions (T, A), states (T, S: MuJoCo's integration state),
                         rewards (T,), dones (T,), obs/state, obs/object, obs/<camera>_image
                         (T, H, W, 3 uint8), next_obs/... (the next frame's, the last repeated:
@@ -62,13 +62,17 @@ def episode_file(columns: dict[str, np.ndarray], images: dict[str, np.ndarray], 
     return buffer.getvalue()
 
 
-def write_index(path, demos: list[tuple[str, int]], env_args: dict) -> None:
-    """demo.hdf5 at `path` (written in place: the caller renames it): data/demo_K linked to each episode's file."""
+def write_index(path, demos: list[tuple[str, int, bool]], env_args: dict) -> None:
+    """demo.hdf5 at `path` (written in place: the caller renames it): data/demo_K linked to each
+    episode's file (file, frames, success), and the filter key mask/successful (robomimic's
+    `hdf5_filter_key`) naming the demos whose task succeeded."""
     import h5py
 
     with h5py.File(path, "w", libver="latest") as f:
         data = f.create_group("data")
-        for k, (file, _) in enumerate(demos):
+        for k, (file, _, _) in enumerate(demos):
             data[f"demo_{k}"] = h5py.ExternalLink(file, DEMO_GROUP)
-        data.attrs["total"] = int(sum(n for _, n in demos))
+        data.attrs["total"] = int(sum(n for _, n, _ in demos))
         data.attrs["env_args"] = json.dumps(env_args)
+        names = [f"demo_{k}" for k, (_, _, success) in enumerate(demos) if success]
+        f.create_dataset("mask/successful", data=np.array(names, dtype="S"), shape=(len(names),), dtype="S16")

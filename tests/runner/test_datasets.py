@@ -179,6 +179,7 @@ def test_robomimic_keeps_the_successes_with_robomimic_keys(out):
     with h5py.File(folder / "demo.hdf5", "r", swmr=True, libver="latest") as f:  # as robomimic opens it
         assert sorted(f["data"]) == ["demo_0", "demo_1"]  # scenes 0 and 2: scene 1 failed
         assert f["data"].attrs["total"] == 2 * FRAMES
+        assert [n.decode() for n in f["mask/successful"][()]] == ["demo_0", "demo_1"]
         env_args = json.loads(f["data"].attrs["env_args"])
         assert env_args["type"] == 2 and env_args["env_kwargs"] == {"spec": SPEC, "frame_skip": 50}
         for name in ("demo_0", "demo_1"):
