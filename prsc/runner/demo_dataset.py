@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from prsc.backends.names import with_body_names
 from prsc.errors import PrscError
 
 from prsc.runner import lerobot_format as lerobot
@@ -253,8 +254,15 @@ class DemoDataset:
 
     def _commit(self, episode: RecordedEpisode) -> None:
         number = len(self.episodes)
+        if self.episodes and [self.episodes[0][k] for k in ("names", "state_size", "cameras")] != \
+                [episode.names, episode.state_size, episode.cameras]:
+            raise PrscError(f"scene {episode.scene_index} records other features than the dataset's first episode "
+                            f"(robots, objects or cameras differ): {self.root} holds one layout")
         self._store_model(episode)
-        entry = {"scene_index": episode.scene_index, "frames": len(episode), "task": episode.task,
+        prefixes = {name.split("/")[0] for name in episode.names["state"]}
+        robot_type = "+".join(Path(str(o.get("model"))).stem for o in with_body_names(episode.scene)["objects"]
+                              if o["body"] in prefixes) or "none"
+        entry = {"scene_index": episode.scene_index, "frames": len(episode), "task": episode.task, "robot_type": robot_type,
                  "model": episode.model_name, "names": episode.names, "state_size": episode.state_size,
                  "cameras": episode.cameras, "success": episode.success,
                  "extras": {"prsc/scene_index": episode.scene_index, "prsc/seed": episode.seed,
@@ -376,8 +384,8 @@ class DemoDataset:
         for camera in self.episodes[0]["cameras"]:
             key = lerobot.IMAGE_PREFIX + camera["name"]
             features[key]["info"] = lerobot.video_info(self.root / lerobot.VIDEO_PATH.format(video_key=key, **lerobot.chunk_file(0)))
-        robots = sorted({n.split("/")[0] for n in self.episodes[0]["names"]["state"]})
-        info = lerobot.info_json(features, self.key["fps"], len(self.episodes), start, len(tasks), "+".join(robots) or "none")
+        info = lerobot.info_json(features, self.key["fps"], len(self.episodes), start, len(tasks),
+                                 self.episodes[0].get("robot_type", "none"))
         _put(self.root, self.root / "meta/info.json", json.dumps(info, indent=4) + "\n")
 
     def _read_stats(self) -> None:
