@@ -229,6 +229,7 @@ class DemoDataset:
     def close(self) -> None:
         """Unlock the folder."""
         if self._lock is not None:
+            shutil.rmtree(self.root / SCRATCH, ignore_errors=True)
             os.close(self._lock)  # the file stays: unlinking it would let a run that opened it lock a ghost
             self._lock = None
 

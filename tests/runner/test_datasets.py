@@ -276,3 +276,38 @@ def test_lerobot_loads_the_dataset_and_decodes_a_fresh_render(lerobot_dataset, t
 
     fresh = replay(lerobot_dataset, 1).replayed["camera"][3]  # the stored state, rendered again
     assert np.array_equal(np.load(frame), fresh)
+
+
+@pytest.mark.parametrize("name", ["lerobot", "robomimic"])
+def test_a_hard_kill_inside_a_commit_is_repaired_on_opening(out, lerobot_dataset, name):
+    """SIGKILL after an episode's files and metadata were written but before prsc-dataset.json
+    counted it (the commit's last write): opening the folder drops that episode, and what is left
+    reads as a dataset of the episodes before it."""
+    import shutil
+
+    from prsc.runner.demo_dataset import DemoDataset
+
+    source = lerobot_dataset if name == "lerobot" else out / "robomimic"
+    if not source.exists():
+        record(out, "robomimic", "--format", "robomimic", "--keep", "success")
+    folder = out / f"hard_kill_{name}"
+    shutil.copytree(source, folder)
+    state = json.loads((folder / "prsc-dataset.json").read_text())
+    kept = len(state["episodes"]) - 1
+    state["episodes"], state["processed"] = state["episodes"][:kept], state["processed"] - 1
+    (folder / "prsc-dataset.json").write_text(json.dumps(state))
+    (folder / ".prsc-scratch").mkdir(exist_ok=True)
+    (folder / ".prsc-scratch" / "1-file-003.parquet").write_bytes(b"cut short")
+    key = {k: v for k, v in state["key"].items() if k != "keep"}
+    dataset = DemoDataset(folder, key, state["key"]["keep"]).open()
+    assert not (folder / ".prsc-scratch" / "1-file-003.parquet").exists()
+    dataset.close()
+    assert not (folder / ".prsc-scratch").exists()
+    if name == "lerobot":
+        check_lerobot_layout(folder, kept)
+        assert not (folder / f"data/chunk-000/file-{kept:03d}.parquet").exists()
+    else:
+        with h5py.File(folder / "demo.hdf5", "r") as f:
+            assert sorted(f["data"]) == [f"demo_{k}" for k in range(kept)]
+            assert f["data"].attrs["total"] == kept * FRAMES
+        assert sorted(p.name for p in (folder / "demos").iterdir()) == [f"demo_{k}.hdf5" for k in range(kept)]
