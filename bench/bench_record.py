@@ -37,7 +37,6 @@ def main() -> None:
 
     choose_gl_backend()
     import mujoco
-    import numpy as np
     import pybullet_data
 
     from prsc.commands.compile import compile_scenes

@@ -196,7 +196,6 @@ class EpisodeFrames:
             "next.reward": np.array([v[0] for v in values], dtype=np.float32),
             "next.done": np.array([v[1] for v in values], dtype=bool),
             "next.success": np.array([v[2] for v in values], dtype=bool),
-            "sim_time": np.array(self.times, dtype=np.float64),
         }
 
     def image_stack(self, camera: str) -> np.ndarray:
