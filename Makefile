@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: setup test demo docs datasets bench casestudy casestudy-check clean
+.PHONY: setup test demo docs datasets bench casestudy casestudy-check clean lerobot-check
 
 setup: $(STAMP)
 
@@ -16,7 +16,7 @@ setup: $(STAMP)
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
-	$(PY) -m pip install -q --no-compile -e '.[dev,ray,gym]'
+	$(PY) -m pip install -q --no-compile -e '.[dev,ray,gym,datasets]'
 	touch $(STAMP)
 
 test: $(STAMP)
@@ -87,3 +87,29 @@ reach: $(STAMP)
 	$(PY) -m prsc.commands.reach --edge-check --jobs 2
 reach-demo: $(STAMP)
 	$(PRSC) run specs/table_cube_reach.prs -n 200 --seed 0 --jobs 2 -o out/reach
+
+# lerobot reads what `prsc run --record` writes (docs/datasets.md): lerobot 0.4.4 in its own venv
+# (CPU torch 2.13.0 first, then lerobot without its pins of an older CUDA torch, then what its
+# dataset reader imports), a 20-episode Franka pick dataset with a 128x128 camera, loaded by
+# LeRobotDataset; then the suite's lerobot test with that venv. torchcodec decodes the videos
+# with the system's FFmpeg 5.1 libraries (Debian: apt-get install libavutil57 libavcodec59
+# libavformat59 libavdevice59 libavfilter8 libswscale6 libswresample4). Not part of `make test`.
+LEROBOT_VENV := .lerobot-venv
+LEROBOT_STAMP := $(LEROBOT_VENV)/.installed
+LEROBOT_EPISODES ?= 20
+PYBULLET_DATA = $$($(PY) -c 'import pybullet_data; print(pybullet_data.getDataPath())')
+$(LEROBOT_STAMP):
+	test -x $(LEROBOT_VENV)/bin/python || $(PYTHON) -m venv $(LEROBOT_VENV)
+	$(LEROBOT_VENV)/bin/pip install -q torch==2.13.0
+	$(LEROBOT_VENV)/bin/pip install -q --no-deps lerobot==0.4.4 torchcodec==0.13.0
+	$(LEROBOT_VENV)/bin/pip install -q "datasets>=4.0.0,<5.0.0" "huggingface-hub>=0.34.2,<0.36.0" "av>=15.0.0,<16.0.0" \
+	  "packaging>=24.2,<26.0" "accelerate>=1.10.0,<2.0.0" "numpy<2.4" pillow
+	touch $(LEROBOT_STAMP)
+
+lerobot-check: $(STAMP) $(LEROBOT_STAMP)
+	$(PRSC) run specs/pybullet_arm/franka_pick_camera.prs --controller prsc.runner.pick:pick -n $(LEROBOT_EPISODES) \
+	  --seed 0 --jobs 2 -I "$(PYBULLET_DATA)" -o out/lerobot-check/run --record out/lerobot-check/franka_pick
+	$(LEROBOT_VENV)/bin/python tests/data/record/lerobot_load.py out/lerobot-check/franka_pick --item 0 \
+	  | $(PY) -c "import json, sys; r = json.loads(sys.stdin.read()); print(r['episodes'], 'episodes,', r['frames'], 'frames,', len(r['features']), 'features read by lerobot'); sys.exit(r['episodes'] != $(LEROBOT_EPISODES))"
+	$(PRSC) replay out/lerobot-check/franka_pick --episode 0
+	PRSC_LEROBOT_PYTHON=$(LEROBOT_VENV)/bin/python $(PY) -m pytest -q tests/runner/test_datasets.py -k lerobot_loads

@@ -12,6 +12,7 @@ without writing files:
     scenario.apply(scenario.scene(0, 8), model, data)   # a reset, no recompiling
 
     env = prsc.SceneEnv("specs/table_cube.prs")  # a gymnasium.Env (pip install 'prsc[gym]')
+    env = prsc.RecordEpisodes(env, "out/demos", format="lerobot")  # its episodes as a dataset
 
 Everything is imported on first use, so `import prsc` stays cheap.
 """
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
 
     from prsc.scenario import Scenario
 
-__all__ = ["load", "mjcf_text", "mujoco_model", "mujoco_spec", "SceneEnv"]
+__all__ = ["load", "mjcf_text", "mujoco_model", "mujoco_spec", "SceneEnv", "RecordEpisodes"]
 
 
 def load(path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = ()) -> Scenario:
@@ -58,9 +59,13 @@ def mujoco_model(scene: dict[str, Any]) -> mujoco.MjModel:
 
 
 def __getattr__(name: str) -> Any:
-    """`prsc.SceneEnv`, imported on first use (it needs the [gym] extra)."""
+    """`prsc.SceneEnv` and `prsc.RecordEpisodes`, imported on first use (they need the [gym] extra)."""
     if name == "SceneEnv":
         from prsc.scene_env import SceneEnv
 
         return SceneEnv
+    if name == "RecordEpisodes":
+        from prsc.record_episodes import RecordEpisodes
+
+        return RecordEpisodes
     raise AttributeError(f"module 'prsc' has no attribute {name!r}")

@@ -15,7 +15,7 @@ from prsc.errors import PrscError, format_error
 
 # Each module in prsc.commands exposes `add_parser(subparsers)` and `run(args) -> int`.
 # Imported lazily so `prsc check` does not pay for mujoco, pxr or pybullet.
-COMMANDS = ("check", "explain", "sample", "compile", "run", "falsify", "bench", "preview", "reach")
+COMMANDS = ("check", "explain", "sample", "compile", "run", "replay", "falsify", "bench", "preview", "reach")
 # The last line of each command's --help: a command to run from a clone (reach: the arm pybullet ships,
 # PYBULLET_DATA being pybullet_data.getDataPath()). tests/cli/test_help_examples.py parses each.
 EXAMPLES = {
@@ -24,6 +24,7 @@ EXAMPLES = {
     "sample": "prsc sample specs/table_cube.prs -n 10 --seed 0 -o scenes.jsonl",
     "compile": "prsc compile specs/table_cube.prs --target mjcf,usd -n 100 -o out",
     "run": "prsc run specs/table_cube.prs -n 20 --seed 0 --jobs 2 -o out/run",
+    "replay": "prsc replay out/demos --episode 0 --frames frames",
     "falsify": "prsc falsify specs/table_cube.prs --budget 200 -o out/falsify",
     "bench": "prsc bench specs/table_cube.prs specs/table_cube_naive.prs",
     "preview": "prsc preview specs/table_cube.prs -n 8 -o sheet.png",

@@ -99,6 +99,7 @@ class SceneEnv(gymnasium.Env):
         if callable(observation) and observation_space is None:
             raise ValueError("an observation function needs its observation_space")
         self.scenario = load(spec, include_dirs)
+        self.spec_path = os.fspath(spec)
         self.model = self.scenario.model()
         self.data = mujoco.MjData(self.model)
         self.frame_skip = frame_skip

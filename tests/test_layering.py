@@ -84,7 +84,7 @@ def _graph() -> dict[str, tuple[set[str], set[str]]]:
     return graph
 
 
-API = {"prsc.scenario", "prsc.scene_env", "prsc.scene_cameras"}  # the library API (prsc.load, SceneEnv and its camera views)
+API = {"prsc.scenario", "prsc.scene_env", "prsc.scene_cameras", "prsc.record_episodes"}  # the library API (prsc.load, SceneEnv and its camera views, RecordEpisodes)
 
 
 def _layer(module: str) -> str:

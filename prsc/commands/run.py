@@ -2,6 +2,7 @@
 
     prsc run FILE -n 100 --seed 0 -o OUT [--controller TARGET] [--jobs J]
              [--executor local|ray [--address ADDR]] [--max-sim-seconds S] [--video K]
+             [--record DIR [--format lerobot|robomimic] [--fps F] [--keep all|success]]
 
 compiles the scenes as `prsc compile --target json,mjcf` does (under OUT/<stem>/), calls the
 controller once per scene with a fresh MjModel/MjData of its MJCF file, and appends each
@@ -9,6 +10,10 @@ finished episode to OUT/results.jsonl. A killed campaign re-run with the same ar
 skips the episodes already recorded; the finished file lists every episode in index order,
 identical (wall-clock times aside) to one an uninterrupted run writes. Then a summary
 table, OUT/outcomes.png and the controller's own plots.
+
+--record DIR also records every episode as a demonstration dataset (docs/datasets.md): the
+robots' joints and grippers, the controls sent, every camera object's images, the MuJoCo
+state, F frames per simulated second; resumable like the results, the same with any --jobs.
 """
 
 from __future__ import annotations
@@ -55,6 +60,18 @@ def add_parser(subparsers) -> None:
     parser.add_argument("--video", type=int, default=0, metavar="K",
                         help="write a frame strip (PNG) of each of the first K episodes that did not succeed")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
+    record = parser.add_argument_group("recording a dataset (docs/datasets.md)")
+    record.add_argument("--record", type=Path, default=None, metavar="DIR",
+                        help="record every episode into the dataset folder DIR (resumed when it holds this recording)")
+    record.add_argument("--format", default="lerobot", choices=("lerobot", "robomimic"),
+                        help="LeRobot v3 (parquet + mp4, default) or robomimic (HDF5)")
+    record.add_argument("--fps", type=int, default=20, metavar="F", help="frames per simulated second (default 20)")
+    record.add_argument("--keep", default="all", choices=("all", "success"),
+                        help="keep every episode (default) or those whose task succeeded")
+    record.add_argument("--no-images", dest="images", action="store_false",
+                        help="record no camera images (a spec without a camera object needs this)")
+    record.add_argument("--lossless", action="store_true",
+                        help="LeRobot videos encoded losslessly (libx264rgb, crf 0): replay matches bit for bit")
     parser.add_argument("--force", action="store_true",
                         help="replace the scenes of another spec, imported file, seed, law or proposal in the output folder (only files prsc listed)")
 
@@ -94,6 +111,36 @@ def _validate(args: argparse.Namespace) -> None:
         raise PrscError(f"--seed must be >= 0, got {args.seed}")
     if not args.max_sim_seconds > 0:
         raise PrscError(f"--max-sim-seconds must be > 0, got {args.max_sim_seconds:g}")
+    if args.record is None and any(getattr(args, k) != v for k, v in RECORD_DEFAULTS.items()):
+        raise PrscError("--format, --fps, --keep, --no-images and --lossless need --record DIR")
+    if args.fps < 1:
+        raise PrscError(f"--fps must be >= 1, got {args.fps}")
+
+
+RECORD_DEFAULTS = {"format": "lerobot", "fps": 20, "keep": "all", "images": True, "lossless": False}
+
+
+def _open_dataset(args: argparse.Namespace, key: dict, tasks: list, scenes: list[dict]) -> Any:
+    """The --record dataset, checked against the campaign before anything in it is touched."""
+    import mujoco
+
+    from prsc.runner.demo_dataset import DemoDataset
+
+    if not tasks:
+        raise PrscError("--record: the campaign has no episodes")
+    timestep = mujoco.MjModel.from_xml_path(tasks[0].mjcf_path).opt.timestep
+    if args.fps > 1.0 / timestep + 1e-9:
+        raise PrscError(f"--fps {args.fps} is above the control rate, {1.0 / timestep:g} steps per simulated second "
+                        f"(timestep {timestep:g} s): a frame per step at most")
+    if args.images and not any(o.get("camera") is not None for o in scenes[0].get("objects", [])):
+        raise PrscError(f"--record: {args.file} has no camera object for images; add one "
+                        "(e.g. `Camera at Vector3D(0, -1, 1.5), with resolution [128, 128]`) or pass --no-images")
+    record_key = {**key, "format": args.format, "fps": args.fps, "images": args.images, "lossless": args.lossless}
+    # robomimic's env_args: a Gymnasium env (its type 2) that steps a frame at a time: prsc.SceneEnv
+    env_args = {"env_name": "prsc/SceneEnv-v0", "type": 2, "env_kwargs": {
+        "spec": str(args.file), "frame_skip": max(1, round(1.0 / (args.fps * timestep)))},
+        "prsc": {"seed": args.seed, "controller": args.controller, "fps": args.fps}}
+    return DemoDataset(args.record, record_key, args.keep, env_args).open()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -103,6 +150,10 @@ def run(args: argparse.Namespace) -> int:
 
     # Before anything imports mujoco: MuJoCo fixes its GL backend at import.
     gl_backend = choose_gl_backend()
+    if args.record is not None:
+        from prsc.runner.demo_dataset import require_libraries
+
+        require_libraries()  # before anything is compiled
     from rich.console import Console
 
     from prsc.runner.controller import declared_outcomes, load_controller, parse_target
@@ -144,12 +195,21 @@ def run(args: argparse.Namespace) -> int:
             check(scene)
     compiled = time.perf_counter()
 
-    results = Results(out, _campaign_key(manifest, args, controller_ref.digest))
-    kept = {k: r for k, r in results.recorded().items() if k < len(tasks)}
+    key = _campaign_key(manifest, args, controller_ref.digest)
+    dataset = _open_dataset(args, key, tasks, scenes) if args.record is not None else None
+    results = Results(out, key)
+    # with --record, an episode is done once the dataset holds it (or left it out by --keep)
+    done = len(tasks) if dataset is None else min(len(tasks), dataset.processed)
+    kept = {k: r for k, r in results.recorded().items() if k < done}
     todo = [t for t in tasks if t.index not in kept]
     results.begin(kept)
     if kept:
         console.print(f"resuming: {len(kept)} of {len(tasks)} episodes already in {out / RESULTS}")
+    record_settings = None
+    if dataset is not None:
+        from prsc.runner.episode_records import RecordSettings
+
+        record_settings = RecordSettings(args.format, args.fps, lossless=args.lossless, images=args.images)
     progress = progress_bar(len(todo), "episodes", "episodes")
     try:
         with progress if progress else nullcontext():
@@ -161,11 +221,14 @@ def run(args: argparse.Namespace) -> int:
                     progress.advance(bar)
 
             cpu_before = cpu_seconds()
-            run_episodes(executor, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray"),
-                         todo, finished)
+            run_episodes(executor, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray",
+                                                record=record_settings),
+                         todo, finished, on_recording=None if dataset is None else lambda k, e: dataset.add(e, k))
             cpu_used = cpu_seconds() - cpu_before
     finally:
         results.close()
+        if dataset is not None:
+            dataset.close()
     finished_at = time.perf_counter()
     ordered = results.finish()  # index order, as a clean run writes
 
@@ -190,6 +253,11 @@ def run(args: argparse.Namespace) -> int:
         episodes += f", {cpu_used / len(todo):.2f} CPU s each"
     console.print(f"compile {compiled - started:.1f} s, {episodes} ({jobs} job(s), {args.executor}); "
                   f"results in {out / RESULTS}")
+    if dataset is not None:
+        frames = sum(e["frames"] for e in dataset.episodes)
+        size = sum(p.stat().st_size for p in Path(args.record).rglob("*") if p.is_file())
+        console.print(f"dataset {args.record} ({args.format}): {len(dataset.episodes)} episodes, {frames} frames, "
+                      f"{size / 1e6:.1f} MB")
     sys.stdout.flush()
     return 0
 

@@ -112,13 +112,15 @@ class Results:
 
 
 def run_episodes(executor: Any, config: Any, tasks: list[Any], on_record: Callable[[dict], None],
-                 extras: Callable[[int], dict] | None = None) -> None:
+                 extras: Callable[[int], dict] | None = None,
+                 on_recording: Callable[[int, Any], None] | None = None) -> None:
     """Run the tasks on `executor`; each finished episode's record (plus `extras(index)`) goes to
-    `on_record` as it finishes. A worker's infrastructure fault stops the campaign."""
+    `on_record` as it finishes, and its recording (when the config records) to `on_recording`.
+    A worker's infrastructure fault stops the campaign."""
     from prsc.runner.worker import run_task
 
-    def finished(answer: tuple[str, Any]) -> None:
-        status, value = answer
+    def finished(answer: tuple) -> None:
+        status, value = answer[:2]
         if status == "fault":
             from prsc.runner.faults import InfrastructureError
 
@@ -127,6 +129,8 @@ def run_episodes(executor: Any, config: Any, tasks: list[Any], on_record: Callab
         if extras is not None:
             record.update(extras(record["index"]))
         on_record(record)
+        if on_recording is not None and len(answer) > 2:
+            on_recording(record["index"], answer[2])
 
     executor.map(run_task, config, tasks, finished)
 

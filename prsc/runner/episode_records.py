@@ -1,4 +1,4 @@
-"""What crosses process lines in a campaign: episode tasks and results (this module imports no mujoco,
+"""What crosses process lines in a campaign: episode tasks, results and how to record them (this module imports no mujoco,
 so a worker can unpickle a task before it chooses its GL backend)."""
 
 from __future__ import annotations
@@ -56,3 +56,16 @@ class EpisodeResult:
                    reason=str(record["reason"]), sim_seconds=float(record["sim_seconds"]),
                    wall_seconds=float(record["wall_seconds"]),
                    extra={k: v for k, v in record.items() if k not in fixed}, task=record.get("task"))
+
+
+
+@dataclass(frozen=True)
+class RecordSettings:
+    """How a campaign records a dataset (docs/datasets.md): format, frames per simulated second,
+    lossless video, whether the cameras are rendered, the task text (empty: the spec's)."""
+
+    format: str
+    fps: int
+    lossless: bool = False
+    images: bool = True
+    task: str = ""

@@ -8,12 +8,11 @@ faults (the file does not load, no GL context) raise InfrastructureError instead
 
 from __future__ import annotations
 
-import contextlib
 import json
 import signal
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import mujoco
@@ -115,8 +114,12 @@ class _Watchdog:
             signal.signal(signal.SIGALRM, self._previous)
 
 
-def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every: float | None = None) -> EpisodeResult:
-    """Run one episode of the task's controller and classify it; infrastructure faults raise."""
+def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every: float | None = None,
+                step_callbacks: Sequence[PeriodicCallback] = (),
+                monitor_ready: Callable[[TaskMonitor], None] | None = None) -> EpisodeResult:
+    """Run one episode of the task's controller and classify it; infrastructure faults raise.
+    `step_callbacks` watch the episode's own data from inside mj_step (a dataset recorder), after the
+    task's monitor, which `monitor_ready` is given once built (its `latest` status is each frame's)."""
     global _observer
     started = time.perf_counter()
     controller = load_controller(task.controller)
@@ -130,10 +133,23 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         limit = min(limit, monitor.task.statements.time_limit)  # `terminate after` bounds the episode
     # The task is watched from inside the episode's own mj_step (prsc/runner/step_hook.py): the
     # controller does not co-operate, and its own models (IK, planning) never reach the monitor.
-    hook = StepHook(model, data, [PeriodicCallback(CONTROL_PERIOD, monitor.update)]) if monitor is not None else None
+    # A monitor that fails ends the task's watch, not the episode; a recorder that fails is a fault.
+    monitor_failure: list[Exception] = []
+
+    def watch_task(m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        if not monitor_failure:
+            try:
+                monitor.update(m, d)
+            except Exception as error:  # noqa: BLE001 - kept for the record
+                monitor_failure.append(error)
+
+    if monitor is not None and monitor_ready is not None:
+        monitor_ready(monitor)
+    watchers = [PeriodicCallback(CONTROL_PERIOD, watch_task)] if monitor is not None else []
+    hook = StepHook(model, data, [*watchers, *step_callbacks])
     finished = True
     try:
-        with _Watchdog(data, limit, frame_every)(model), hook or contextlib.nullcontext():
+        with _Watchdog(data, limit, frame_every)(model), hook:
             returned = controller(with_body_names(task.scene), model, data)
         outcome, reason, extra = _interpret(returned)
     except SimulationTimeLimit:
@@ -147,15 +163,18 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         outcome, reason, extra = "error", f"{type(error).__name__}: {message[0] if message else ''}".rstrip(": "), {}
     finally:
         _observer = None
+    if hook.error is not None and not isinstance(hook.error, SimulationTimeLimit):  # the limit's tick may land in a callback
+        raise InfrastructureError(f"a step callback failed: {type(hook.error).__name__}: {hook.error}")
     if outcome != "timeout" and data.time > limit:
         outcome, reason, extra = "timeout", f"ran {data.time:g} simulated seconds, past the limit of {limit:g}", {}
         finished = False
     task_record = None
     if monitor is not None:
-        if hook is not None and hook.error is not None:
+        if monitor_failure:
             # the monitor failed (a bug, or a task the scene's model cannot answer): the record says so
+            error = monitor_failure[0]
             task_record = {"outcome": "error", "trivial": False, "decided_at": None, "robustness": {}, "records": {},
-                           "reason": f"{type(hook.error).__name__}: {hook.error}"}
+                           "reason": f"{type(error).__name__}: {error}"}
         else:
             task_record = monitor.result(model, data, controller_finished=finished)
     return EpisodeResult(

@@ -184,6 +184,7 @@ class TaskMonitor:
         self.world.prepare(distance_pairs(self.task))
         self.moving = velocity_objects(self.task)  # the objects whose velocities the task reads
         self.monitor = EpisodeMonitor(self.task)
+        self.latest: TaskStatus | None = None  # the last update's status (a dataset recorder's frames read it)
 
     def state(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
         """The world state of `data` at `data.time` (distances computed when the task asks)."""
@@ -192,7 +193,8 @@ class TaskMonitor:
 
     def update(self, model: mujoco.MjModel, data: mujoco.MjData) -> TaskStatus:
         """Evaluate the task at `data.time`."""
-        return self.monitor.update(self.state(model, data))
+        self.latest = self.monitor.update(self.state(model, data))
+        return self.latest
 
     def result(self, model: mujoco.MjModel, data: mujoco.MjData, controller_finished: bool) -> dict:
         """The record's "task" dict (`record final` evaluated on `data`)."""
