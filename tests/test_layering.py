@@ -164,3 +164,13 @@ def test_no_import_cycles():
         if v not in index:
             visit(v)
     assert cycles == []
+
+
+def test_module_names_are_unique():
+    """A module's name says which one it is: no two modules of the tree share a file name."""
+    names: dict[str, list[str]] = {}
+    for folder in ROOTS.values():
+        for path in folder.rglob("*.py"):
+            if path.name != "__init__.py":
+                names.setdefault(path.name, []).append(str(path.relative_to(REPO)))
+    assert {name: paths for name, paths in names.items() if len(paths) > 1} == {}

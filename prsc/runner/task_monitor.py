@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 
 from prsc.backends.names import with_body_names
-from prsc.task.evaluate import distance_pairs, velocity_objects
+from prsc.task.robustness import distance_pairs, velocity_objects
 from prsc.task.monitor import EpisodeMonitor, TaskStatus
 from prsc.task.terms import Task
 from prsc.task.world import DISTANCE_CAP, Pose, WorldState

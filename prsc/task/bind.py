@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from prsc.geometry.container import Interior, asset_interior, declared_interior
-from prsc.task.regions import box_region
+from prsc.task.task_regions import box_region
 from prsc.task.terms import Region, Task, TaskObject, TaskStatements
 
 ROBOT_FINGERS = {"panda": ("leftfinger", "rightfinger")}

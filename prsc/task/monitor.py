@@ -7,7 +7,7 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
-from prsc.task.evaluate import Evaluator, json_value
+from prsc.task.robustness import Evaluator, json_value
 from prsc.task.terms import Task
 from prsc.task.world import WorldState
 

@@ -7,8 +7,8 @@ import numpy as np
 from scipy.optimize import lsq_linear
 from scipy.spatial.transform import Rotation
 
-from prsc.task.evaluate import Evaluator, Truth
-from prsc.task.regions import box_corners, box_region
+from prsc.task.robustness import Evaluator, Truth
+from prsc.task.task_regions import box_corners, box_region
 from prsc.task.terms import Region, Task, TaskObject, TaskStatements, Term
 from prsc.task.world import Pose, WorldState
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from prsc.task.regions import (box_corners, box_region, point_polygon_distance, polygon_signed_distance,
+from prsc.task.task_regions import (box_corners, box_region, point_polygon_distance, polygon_signed_distance,
                                prepared_polygon, prism_signed_distance)
 from prsc.task.terms import DIRECTIONS, Task, TaskObject, Term
 from prsc.task.world import Pose, WorldState
