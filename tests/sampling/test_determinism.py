@@ -77,7 +77,7 @@ def test_worker_processes_draw_the_same_scenes():
 
 
 def test_every_sampler_is_deterministic():
-    for name in ("hit-and-run", "rejection"):
+    for name in ("hit-and-run", "baseline"):
         a, b = compile_sampler(SPEC, sampler=name), compile_sampler(SPEC, sampler=name)
         assert _dump(a.scene(1, 2)) == _dump(b.scene(1, 2))
 
