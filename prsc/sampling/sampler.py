@@ -150,7 +150,7 @@ class Sampler:
     def each_result(self, seed: int, indices: Sequence[int]) -> Iterator[tuple[int, SceneResult]]:
         """(index, result) for scenes `indices`, lazily: a chunk of scenes at a time on a chunked or
         batched path, else one at a time."""
-        step = CHUNK if self.plan.chunked else BATCH if self.plan.path == BATCHED else 1
+        step = {CANDIDATE_ROUNDS: CHUNK, BATCHED: BATCH}.get(self.plan.path, 1) if self._group is None else self._group.chunk
         for first in range(0, len(indices), step):
             chunk = indices[first:first + step]
             yield from zip(chunk, self.results(seed, chunk))

@@ -29,7 +29,7 @@ from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchPlan, batch_plan
 from prsc.sampling.candidate_plan import CandidatePlan, candidate_plan
 from prsc.sampling.candidates import CandidateSampler
-from prsc.sampling.group_gibbs import SWEEPS as GROUP_SWEEPS, GroupObject, group_plan
+from prsc.sampling.group_gibbs import GroupObject, group_plan, group_sweeps
 from prsc.sampling.runtime import ObjectRuntime
 
 BATCHED = "batched"
@@ -102,4 +102,4 @@ def sampler_plan(
         group = group_plan(plan, runtimes)
     except Unbatchable as reason:
         return SamplerPlan(SWEEPS, f"{unbatched}; {few}; no Gibbs rounds: {reason}", law, sweeps=sweeps)
-    return SamplerPlan(GIBBS_ROUNDS, f"{unbatched}; {few}", law, group=group, sweeps=max(GROUP_SWEEPS, sweeps))
+    return SamplerPlan(GIBBS_ROUNDS, f"{unbatched}; {few}", law, group=group, sweeps=group_sweeps(group, sweeps))
