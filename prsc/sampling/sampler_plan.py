@@ -102,4 +102,7 @@ def sampler_plan(
         group = group_plan(plan, runtimes)
     except Unbatchable as reason:
         return SamplerPlan(SWEEPS, f"{unbatched}; {few}; no Gibbs rounds: {reason}", law, sweeps=sweeps)
-    return SamplerPlan(GIBBS_ROUNDS, f"{unbatched}; {few}", law, group=group, sweeps=group_sweeps(group, sweeps))
+    rounds = group_sweeps(group, sweeps)
+    drawn = [o.name for o in group if o.drawn is not None]
+    afresh = f"; {', '.join(drawn)} drawn afresh in each update (their size or yaw changes between scenes)" if drawn else ""
+    return SamplerPlan(GIBBS_ROUNDS, f"{unbatched}; {few}; {rounds} sweeps{afresh}", law, group=group, sweeps=rounds)
