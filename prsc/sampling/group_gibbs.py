@@ -30,7 +30,7 @@ The law is the Gibbs sampler's: the joint law as far as `SWEEPS` sweeps mix.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -185,7 +185,7 @@ def _drawable(item: CandidateObject, anchors: set[str | None], drawn: dict[str, 
     if item.name in anchors:
         raise Unbatchable(f"{item.name}'s size or rotation changes between scenes, and another object rests on it")
     carrier = next(o for o in plan.objects if o.name == region.anchor)
-    if region.anchor in drawn or carrier.yaw is not None or not carrier.upright:
+    if region.anchor in drawn or carrier.yaw is not None or carrier.toward is not None or not carrier.upright:
         raise Unbatchable(f"{item.name} rests on {region.anchor}, whose rotation changes between scenes or is not upright")
 
 
