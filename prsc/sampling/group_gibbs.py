@@ -2,8 +2,8 @@
 
 Where hardly a whole-scene candidate passes (ten cubes in a tray, a bin of parts), the joint
 law is drawn as the Gibbs sweeps draw it (gibbs.py): a sequential start, then sweeps that
-redraw each object from its conditional given all the others. Here both run for 64 scenes
-at once, for specs without requires whose objects are either
+redraw each object from its conditional given all the others. Here both run for 64 scenes (256
+when boxes are drawn afresh) at once, for specs without requires whose objects are either
 - fixed boxes (a fixed size and rotation) in a region that is fixed or carried by an anchor:
   an object's draw, given the others, is uniform on its region minus their boxes: the
   first of 512 uniform proposals that meets no box, else (rarely) the free space
