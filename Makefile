@@ -58,8 +58,11 @@ datasets: $(STAMP)
 # handover episodes per CPU-second (and where an episode's CPU time goes). Only the
 # repository's own specs: a clone stands alone.
 BENCH_SPECS := specs/table_cube.prs specs/table_cube_naive.prs
+# Packed bins of parts of random size and yaw (issue 38): the joint law against the sequential one.
+PACKED_SPECS := specs/bin_ten_parts.prs specs/bin_twenty_parts.prs
 bench: $(STAMP)
 	$(PRSC) bench $(BENCH_SPECS)
+	$(PRSC) bench $(PACKED_SPECS) --samplers exact --laws joint,sequential --seconds 10
 	$(PRSC) bench --backends specs/table_cube.prs -n 1000 --jobs 1,2
 	$(PRSC) bench --episodes specs/table_cube.prs -n 21
 

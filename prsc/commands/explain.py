@@ -2,7 +2,9 @@
 
 --stage syntax: the syntax tree of FILE alone (imports are not followed), one node per
 line with its line:col. --stage ir: the typed IR (names resolved, evaluation order).
---stage constraints (default): the evaluation order, then per object its rows
+--stage constraints (default): the sampler's path (batched, candidate rounds, Gibbs rounds,
+sequential + sweeps, sequential, hit-and-run, rejection or baseline) and why, the evaluation
+order, then per object its rows
 `a . p <= b` / `a . p = b` on its centre p, each with the specifier and source line that
 produced it, the region's dimension and length/area/volume, how it is cached, and the
 requires checked by rejection, and the cells its centre stays out of (`not visible from C`)
@@ -99,21 +101,12 @@ def explain_constraints(sampler: Any, seed: int, index: int) -> str:
     result = sampler.sample(seed, index)
     ctx = result.context
     out = [f"spec: {sampler.spec}", "evaluation order: " + ", ".join(p.name for p in cprog.objects)]
-    if sampler.batched:
-        out.append("drawn in batches (docs/sampling.md, \"Batched sampling\")")
-    elif sampler.candidates:
-        out.append("drawn by candidate rounds, Gibbs sweeps where none passes (docs/sampling.md, \"Candidate rounds\")")
-    elif sampler.gibbs_rounds:
-        out.append("drawn by Gibbs rounds, the sweeps vectorised over scenes (docs/sampling.md, \"Gibbs rounds\"): "
-                   + sampler.no_candidates_because)
-    else:
-        out.append(f"drawn one scene at a time: {sampler.unbatched_because}"
-                   + (f"; Gibbs sweeps, not candidate rounds: {sampler.no_candidates_because}" if sampler.law == "joint" else ""))
+    out.append(sampler.plan.describe())
     out.append(f"rows are on each object's centre p = (x, y, z); random inputs as drawn in scene {index} of seed {seed}")
     if cprog.scene_checks:
         out.append("requires on no object (checked once per scene):")
         out.extend(f"    {labels[c.label_id].text}  [{_where(labels[c.label_id].span)}]" for c in cprog.scene_checks)
-    engine_runtimes = getattr(sampler._engine, "runtimes", [])
+    engine_runtimes = sampler.runtimes
     for plan, obj in zip(cprog.objects, result.objects):
         rt = engine_runtimes[plan.index] if plan.index < len(engine_runtimes) else None
         out.append("")

@@ -26,10 +26,10 @@ def add_parser(subparsers: Any) -> None:
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     parser.add_argument("--start", type=int, default=0, help="index of the first scene (default 0)")
     parser.add_argument("--include", "-I", action="append", default=[], metavar="DIR", help="also search DIR for imports")
-    parser.add_argument("--sampler", choices=("exact", "hit-and-run", "rejection"), default="exact",
-                        help="exact (default), hit-and-run (the paper's), or rejection (the naive baseline)")
+    parser.add_argument("--sampler", default="exact", metavar="{exact,hit-and-run,baseline}",
+                        help="exact (default), hit-and-run (the paper's), or baseline (the paper's naive baseline)")
     parser.add_argument("--walk-length", type=int, default=100, help="hit-and-run steps per sample (default 100)")
-    parser.add_argument("--joint", action="store_true", help="the same as --law rejection")
+    parser.add_argument("--joint", action="store_true", help=argparse.SUPPRESS)  # gone: said why in run()
     add_law_argument(parser)
     add_proposal_argument(parser)
     parser.add_argument("-o", "--output", metavar="PATH", help="write to PATH instead of stdout")
@@ -74,6 +74,9 @@ def run(args: argparse.Namespace) -> int:
     """Sample and write the scenes."""
     from prsc.sampling import compile_sampler
 
+    if args.joint:
+        raise PrscError("--joint is gone: the joint law is the default (--law joint); "
+                        "whole-scene rejection, its exact reference, is --law rejection")
     if args.scenes < 0:
         raise PrscError(f"-n must be >= 0, got {args.scenes}")
     for option, value in (("--seed", args.seed), ("--start", args.start)):
@@ -81,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
             raise PrscError(f"{option} must be >= 0, got {value}")
     target = None if args.output is None else output_file(args.output)
     proposal = proposal_from_json(read_proposal(args.proposal, args.file))
-    sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length, joint=args.joint,
-                              law=args.law, proposal=proposal)
+    sampler = compile_sampler(args.file, args.include, args.sampler, walk_length=args.walk_length, law=args.law,
+                              proposal=proposal)
     if target is None:
         stats = write_scenes(sampler, args.seed, args.start, args.scenes, sys.stdout)
         sys.stdout.flush()

@@ -1,4 +1,4 @@
-"""Scene sampling: exact sequential placement, hit-and-run, and the rejection baseline."""
+"""Scene sampling: exact sequential placement, hit-and-run, and the paper's naive baseline."""
 
 from __future__ import annotations
 

@@ -24,7 +24,7 @@ class Limits:
     # ten cubes on a tray sample 2x faster than with 200, bin_picking 1.2x (docs/sampling.md).
     exact_point_draws: int = 20
     free_draws: int = 50  # draws from the decomposition (only rounding or requires reject these)
-    joint_attempts: int = 100_000  # whole-scene rejections with joint=True
+    joint_attempts: int = 100_000  # whole-scene rejections under --law rejection
     # Work per scene over all restarts and backtracks: object placements tried (each may
     # prepare a region) and positions drawn. Whatever the spec, a scene ends within these.
     placement_budget: int = 2_000

@@ -38,6 +38,8 @@ class CandidateObject:
     region: Region
     obstacles: tuple[str, ...]  # earlier objects its box must not collide with
     toward: BatchValue | None = None  # `facing toward` this point: a yaw from its centre, once drawn
+    bounds: tuple[np.ndarray, np.ndarray] | None = None  # bounds of its centre in every candidate
+    reach: float = 0.0  # bound of its box's half diagonal in every candidate
 
     @property
     def upright(self) -> bool:
@@ -86,7 +88,7 @@ def candidate_plan(cprog: ConstraintProgram, runtimes: Sequence[ObjectRuntime]) 
             other.name for j, other in enumerate(objects)
             if not runtimes[j].allow_static and j not in plan.rests_in and not apart(*placed.bounds[name], placed.reaches[name], *placed.bounds[other.name], placed.reaches[other.name])
         )
-        objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles, toward))
+        objects.append(CandidateObject(name, sizes, yaw, rotation, region, obstacles, toward, (lo, hi), reach))
         requires += [(index, _require_test(compiler, conditions[c.label_id], c.soft)) for c in plan.checks]
         requires += [(index, _outside_test(rule, name, decls, placed)) for rule in plan.exclusions]
         if region.tested is not None:

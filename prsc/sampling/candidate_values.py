@@ -10,12 +10,12 @@ joint law is drawn by Gibbs sweeps instead.
 
 from __future__ import annotations
 
-import math
 import operator
 from typing import Any, Callable
 
 import numpy as np
 
+from prsc.constraints.distributions import truncated_normal, truncated_normal_mass
 from prsc.ir import model as ir
 from prsc.ir.program import Program
 from prsc.sampling.batch_values import BatchCompiler, BatchState, BatchValue, Unbatchable, _memoised, draw_site
@@ -130,19 +130,14 @@ class CandidateCompiler(BatchCompiler):
 
     def _truncnormal(self, e: ir.Distribution) -> BatchValue:
         mean, sd, low, high = self._constants(e.args, "TruncatedNormal's arguments")
-        if not (sd > 0 and low < high):
-            raise Unbatchable("a TruncatedNormal the scalar sampler refuses")
-        pa, pb = _normal_cdf((low - mean) / sd), _normal_cdf((high - mean) / sd)
-        if not pb > pa:
-            raise Unbatchable("a TruncatedNormal without mass")
+        try:
+            mass = truncated_normal_mass(mean, sd, low, high)
+        except ValueError:
+            raise Unbatchable("a TruncatedNormal the scalar sampler refuses") from None
         site = draw_site(e.draw_id)
 
         def draw(state: BatchState) -> np.ndarray:
-            from scipy.special import ndtri  # as distributions.py: when drawn, not on every start-up
-
-            # The scalar draw's inverse CDF (distributions.py), one uniform per draw.
-            value = mean + sd * ndtri(pa + (pb - pa) * uniforms(state.keys, site, 1))
-            return np.clip(value, low, high)
+            return truncated_normal(mean, sd, low, high, mass, uniforms(state.keys, site, 1))  # the scalar draw's
 
         return _memoised(e.draw_id, draw, np.array([low]), np.array([high]))
 
@@ -160,11 +155,6 @@ class CandidateCompiler(BatchCompiler):
             return table[np.minimum(which, len(table) - 1)]
 
         return _memoised(e.draw_id, draw, table.min(keepdims=True), table.max(keepdims=True))
-
-
-def _normal_cdf(x: float) -> float:
-    """The standard normal CDF (scipy's ndtr, without importing scipy to compile a spec)."""
-    return 0.5 * math.erfc(-x / math.sqrt(2.0))
 
 
 def _call_bounds(func: str, args: list[BatchValue]) -> tuple[np.ndarray, np.ndarray]:

@@ -133,13 +133,7 @@ class CandidateSampler:
         for test in self._after.get(-1, ()):
             ok &= test(state)
         for k, item in enumerate(self.plan.objects):
-            state.dims[item.name] = np.concatenate([np.broadcast_to(s.fn(state), (n, 1)) for s in item.sizes], axis=1)
-            state.rotations[item.name] = _rotations(item, state, n)
-            position, valid = _draw(item.region, item.name, state, uniforms(keys, 4 * k, item.region.uniforms))
-            state.positions[item.name] = position
-            if item.toward is not None:
-                state.rotations[item.name] = _facing(np.broadcast_to(item.toward.fn(state), (n, 3)) - position)
-            ok &= valid
+            ok &= draw_box(item, k, state)
             # The box's axis-aligned half extents, for the broad phase of later pairs too.
             state.reaches[item.name] = np.einsum("nij,nj->ni", np.abs(state.rotations[item.name]), state.dims[item.name] * 0.5)
             if item.obstacles:
@@ -178,6 +172,19 @@ class CandidateSampler:
         if rejected:
             stats.add(REJECTED, rejected)
         return SceneResult(objects, evaluate_params(self.cprog, ctx), stats, ctx)
+
+
+def draw_box(item: CandidateObject, site: int, state: CandidateState) -> np.ndarray:
+    """Each candidate's box of one object (the `site`th of its plan) drawn into `state`: size and yaw from
+    their priors, the centre uniform on its region given the earlier objects; which regions were not empty."""
+    n = len(state.keys)
+    state.dims[item.name] = np.concatenate([np.broadcast_to(s.fn(state), (n, 1)) for s in item.sizes], axis=1)
+    state.rotations[item.name] = _rotations(item, state, n)
+    position, valid = _draw(item.region, item.name, state, uniforms(state.keys, 4 * site, item.region.uniforms))
+    state.positions[item.name] = position
+    if item.toward is not None:
+        state.rotations[item.name] = _facing(np.broadcast_to(item.toward.fn(state), (n, 3)) - position)
+    return valid
 
 
 def _rotations(item: CandidateObject, state: CandidateState, n: int) -> np.ndarray:

@@ -17,7 +17,7 @@ a bounded number of times, then restarts the scene; after a bounded number of re
 the scene fails with the rejection statistics (never a hang).
 
 `sweeps > 0` gives the joint law without rejection: Metropolis-within-Gibbs sweeps over
-the sequential sample (gibbs.py). `joint=True` gives the joint law by rejection instead:
+the sequential sample (gibbs.py). `joint=True` (the path `rejection`) gives the joint law by rejection instead:
 objects are drawn from their regions ignoring collisions and rejection-checked requires,
 and the whole scene is rejected if any pair collides or any require fails. (Exact for the
 joint law when each object's region measure does not depend on earlier placements, as

@@ -1,22 +1,31 @@
-"""Gibbs sweeps vectorised over scenes, for packed specs of fixed boxes (docs/sampling.md,
-"Gibbs rounds").
+"""Gibbs sweeps vectorised over scenes, for packed specs (docs/sampling.md, "Gibbs rounds").
 
-Where hardly a whole-scene candidate passes (ten cubes in a tray), the joint law is drawn
-as the Gibbs sweeps draw it (gibbs.py): a sequential start, then sweeps that redraw each
-object from its conditional given all the others. Here both run for 64 scenes at once, for
-specs whose objects have a fixed size and rotation, a region that is fixed or carried by
-an anchor, and no requires:
-- an object's draw, given the others, is uniform on its region minus their boxes: the
+Where hardly a whole-scene candidate passes (ten cubes in a tray, a bin of parts), the joint
+law is drawn as the Gibbs sweeps draw it (gibbs.py): a sequential start, then sweeps that
+redraw each object from its conditional given all the others. Here both run for 64 scenes (256
+when boxes are drawn afresh) at once, for specs without requires whose objects are either
+- fixed boxes (a fixed size and rotation) in a region that is fixed or carried by an anchor:
+  an object's draw, given the others, is uniform on its region minus their boxes: the
   first of 512 uniform proposals that meets no box, else (rarely) the free space
   decomposed exactly for that scene, which is uniform on the free part too (the mixture
-  argument of batched.BatchedSampler._free_again);
+  argument of batched.BatchedSampler._free_again); or
+- drawn boxes, whose size or yaw changes between scenes (a washer of random diameter at a
+  random yaw), `[completely] in`/`on` an anchor's floor or face or on a fixed plane, their
+  size and yaw reading no other object's draws: an update proposes the object afresh as the
+  rejection reference draws it (size and yaw from their priors, the centre uniform on the
+  region they leave, candidate_regions.py), and keeps the first of 512 proposals that meets
+  no box. That is an exact draw of the object's whole conditional (size, yaw and centre)
+  given the others; where none of the 512 is free the object stays, which is the identity
+  mixed into the exact kernel with a weight that depends on the others alone, so the
+  joint law is still invariant (only the mixing slows);
 - an anchor (the tray) is not redrawn: its dependants' regions only translate with it and
   meet no box outside its group, so the joint law of the group does not depend on where
   the anchor is, and the anchor's law is its start's (uniform on its region);
 - the start places objects in order, each from its region minus the earlier boxes; a dead
   end restarts the scene's start from the next stream (at most `STARTS` times).
-Every draw reads the counter stream at (seed, scene, stage, object): scene k is the same in
-any chunk. The law is the Gibbs sampler's: the joint law as far as `SWEEPS` sweeps mix.
+Every draw reads the counter stream at (seed, scene, stage, object) (a drawn object's
+proposals as candidate numbers past `_PROPOSAL_BASE`): scene k is the same in any chunk.
+The law is the Gibbs sampler's: the joint law as far as `SWEEPS` sweeps mix.
 """
 
 from __future__ import annotations
@@ -28,26 +37,34 @@ import numpy as np
 
 from prsc.constraints.context import SceneContext
 from prsc.constraints.polytope_ir import ConstraintProgram
-from prsc.constraints.values import ObjectValue
+from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError
-from prsc.geometry.obb import CONTACT_TOL, axis_aligned
+from prsc.geometry.obb import CONTACT_TOL, axis_aligned, pair_overlaps, upright_overlaps
 from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.sampling.batch_values import Unbatchable
-from prsc.sampling.candidate_plan import CandidatePlan
+from prsc.sampling.candidate_plan import CandidateObject, CandidatePlan
+from prsc.sampling.candidate_values import CandidateState
+from prsc.sampling.candidates import draw_box
 from prsc.sampling.collisions import PlacedBox, apart, collide_pairs, obstacles_for
-from prsc.sampling.counter_stream import scene_keys, uniforms
+from prsc.sampling.counter_stream import candidate_keys, scene_keys, uniforms
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.prepared import Prepared
 from prsc.sampling.runtime import ObjectRuntime, evaluate_params
 from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
 
-SWEEPS = 16  # sweeps per scene (docs/sampling.md, "Gibbs rounds": the start correlation they leave)
+SWEEPS = 16  # sweeps per scene of fixed boxes (docs/sampling.md, "Gibbs rounds": the start correlation they leave)
+# Sweeps per scene when some boxes are drawn afresh (size, yaw and centre from the exact conditional): on the
+# ten-part bin the start correlation is at the noise floor after 4 (docs/sampling.md, "Gibbs rounds").
+DRAWN_SWEEPS = 6
 PROPOSALS = (32, 480)  # uniform proposals per draw, in two blocks, before the exact free space
+DRAWN_PROPOSALS = (8, 8, 16, 32, 64, 128, 256)  # a drawn object's proposals per update, in blocks that double (a few scenes need many)
 STARTS = 64  # starts per scene before a dead end is an error (37 % of ten cubes' starts meet one)
-CHUNK = 64  # scenes drawn together
+CHUNK = 64  # scenes drawn together (of fixed boxes)
+DRAWN_CHUNK = 256  # scenes drawn together when some boxes are drawn afresh: numpy calls per update, not their size, cost most
 _SITE = 1 << 21  # even counter-stream sites from here: 2 * (stage * objects + k)
+_PROPOSAL_BASE = 1 << 32  # a drawn object's proposals: candidate numbers from here (candidate rounds use < 468)
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,27 +72,84 @@ class GroupObject:
     """One object as the vectorised sweeps draw it."""
 
     name: str
-    rotation: np.ndarray
-    half: np.ndarray
-    reach: np.ndarray  # half extents of its axis-aligned box
+    rotation: np.ndarray  # a fixed box's (the identity for a drawn one)
+    half: np.ndarray  # a fixed box's half extents
+    reach: np.ndarray  # half extents of its axis-aligned box (a bound over every draw for a drawn one)
     upright: bool
     aligned: bool  # its box is its axis-aligned box
-    prepared: Prepared  # its region (about its anchor when carried)
+    prepared: Prepared | None  # a fixed box's region (about its anchor when carried)
     anchor: str | None
     movable: bool  # redrawn in sweeps (not a point, not an anchor)
     partners: tuple[int, ...]  # objects (indices) whose boxes it may meet
+    drawn: CandidateObject | None = None  # its size or yaw changes: drawn as candidate rounds draw it
+    site: int = 0  # its index in the candidate plan (the counter-stream site of its centre there)
+
+
+@dataclass
+class _Boxes:
+    """The current boxes of a chunk's scenes, per object: centres (m, 3); rotations, half extents and
+    reaches one array for every scene (a fixed box) or one row per scene (a drawn box), with its draws."""
+
+    positions: list[np.ndarray]
+    rotations: list[np.ndarray]
+    halves: list[np.ndarray]
+    reaches: list[np.ndarray]
+    draws: list[dict[int, np.ndarray]]  # a drawn box's draws: draw id -> (m, 1)
+    per_scene: tuple[bool, ...]
+
+    def rows(self, rows: np.ndarray) -> "_Boxes":
+        """These scenes' boxes (copies)."""
+        pick = [(r[rows], h[rows], e[rows]) if own else (r, h, e)
+                for r, h, e, own in zip(self.rotations, self.halves, self.reaches, self.per_scene)]
+        return _Boxes([p[rows] for p in self.positions], [x[0] for x in pick], [x[1] for x in pick], [x[2] for x in pick],
+                      [{d: v[rows] for d, v in draws.items()} for draws in self.draws], self.per_scene)
+
+    def set(self, k: int, rows: np.ndarray, drawn: "_Drawn", which: np.ndarray) -> None:
+        """Object k in scenes `rows` becomes the drawn rows `which`."""
+        self.positions[k][rows] = drawn.positions[which]
+        if self.per_scene[k]:
+            self.rotations[k][rows] = drawn.rotations[which]
+            self.halves[k][rows] = drawn.halves[which]
+            self.reaches[k][rows] = drawn.reaches[which]
+            for draw_id, values in drawn.draws.items():
+                self.draws[k].setdefault(draw_id, np.zeros((len(self.positions[k]), 1)))[rows] = values[which]
+
+
+@dataclass
+class _Drawn:
+    """Proposed boxes of one object, one row per proposal."""
+
+    positions: np.ndarray
+    rotations: np.ndarray
+    halves: np.ndarray
+    reaches: np.ndarray
+    draws: dict[int, np.ndarray]
+
+
+def group_sweeps(objects: tuple[GroupObject, ...], asked: int) -> int:
+    """The sweeps a group plan runs: DRAWN_SWEEPS when every box the sweeps move is drawn afresh (measured
+    there), else SWEEPS (fixed boxes mix more slowly: ten cubes); more when asked."""
+    drawn = all(o.drawn is not None for o in objects if o.movable)
+    return max(DRAWN_SWEEPS if drawn else SWEEPS, asked)
 
 
 def group_plan(plan: CandidatePlan, runtimes: Sequence[ObjectRuntime]) -> tuple[GroupObject, ...]:
     """The objects of a spec the vectorised sweeps draw; Unbatchable says why not."""
     if plan.requires or len(plan.soft):
         raise Unbatchable("requires checked per scene")
-    anchors = {o.region.anchor for o in plan.objects if o.region.kind == "carried"}
+    anchors = {o.region.anchor for o in plan.objects if o.region.kind in ("carried", "rectangle")}
     bounds: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-    items: list[tuple[str, np.ndarray, np.ndarray, np.ndarray, Prepared, str | None]] = []
+    items: list[tuple[str, np.ndarray, np.ndarray, np.ndarray, Prepared | None, str | None]] = []
+    drawn: dict[str, CandidateObject] = {}
     for item, rt in zip(plan.objects, runtimes):
-        if item.yaw is not None or item.toward is not None or any(s.constant is None for s in item.sizes):
-            raise Unbatchable(f"{item.name}'s size or rotation changes between scenes")
+        if item.toward is not None:
+            raise Unbatchable(f"{item.name} faces toward a point")
+        if item.yaw is not None or any(s.constant is None for s in item.sizes):
+            _drawable(item, anchors, drawn, plan)
+            bounds[item.name], reach = _drawn_bounds(item, bounds[item.region.anchor])  # type: ignore[index]
+            items.append((item.name, np.eye(3), np.zeros(3), reach, None, item.region.anchor))
+            drawn[item.name] = item
+            continue
         if item.region.kind == "fixed":
             prepared, anchor = rt.provider.static_prepared, None
         elif item.region.kind == "carried" and item.name not in anchors:
@@ -87,17 +161,64 @@ def group_plan(plan: CandidatePlan, runtimes: Sequence[ObjectRuntime]) -> tuple[
         lo, hi = (prepared.lo, prepared.hi) if anchor is None else (bounds[anchor][0] + prepared.lo, bounds[anchor][1] + prepared.hi)
         bounds[item.name] = (lo, hi)
         items.append((item.name, item.rotation, half, np.abs(item.rotation) @ half, prepared, anchor))
+    _own_draws(plan, drawn)
     objects = []
     for k, ((name, rotation, half, reach, prepared, anchor), rt) in enumerate(zip(items, runtimes)):
         partners = tuple(j for j in range(len(items)) if j != k and _may_meet(k, j, items, bounds, runtimes))
-        objects.append(GroupObject(name, rotation, half, reach, bool(plan.objects[k].upright), axis_aligned(rotation), prepared, anchor,
-                                   name not in anchors and prepared.sampler is not None, partners))
+        item = drawn.get(name)
+        movable = name not in anchors and (item is not None or prepared.sampler is not None)  # type: ignore[union-attr]
+        objects.append(GroupObject(name, rotation, half, reach, bool(plan.objects[k].upright),
+                                   item is None and axis_aligned(rotation), prepared, anchor, movable, partners, item, k))
     for obj in objects:
         group = {k for k, o in enumerate(objects) if o.anchor == obj.name}
-        if obj.name in anchors and (obj.anchor is not None or not all(set(objects[d].partners) <= group for d in group)
-                                    or set(obj.partners) - group):
+        if obj.name in anchors and (obj.anchor is not None or obj.drawn is not None
+                                    or not all(set(objects[d].partners) <= group for d in group) or set(obj.partners) - group):
             raise Unbatchable(f"{obj.name}'s group meets objects outside it, so where it stands changes its law")
     return tuple(objects)
+
+
+def _drawable(item: CandidateObject, anchors: set[str | None], drawn: dict[str, CandidateObject], plan: CandidatePlan) -> None:
+    """Unbatchable unless an object of random size or yaw is one the sweeps draw afresh: upright on an
+    upright anchor's face or floor, cut by nothing else."""
+    region = item.region
+    if region.kind != "rectangle" or region.cuts or region.tested is not None or not item.upright:
+        raise Unbatchable(f"{item.name}'s size or rotation changes between scenes, and its region is not an "
+                          "anchor's face or floor alone")
+    if item.name in anchors:
+        raise Unbatchable(f"{item.name}'s size or rotation changes between scenes, and another object rests on it")
+    carrier = next(o for o in plan.objects if o.name == region.anchor)
+    if region.anchor in drawn or carrier.yaw is not None or carrier.toward is not None or not carrier.upright:
+        raise Unbatchable(f"{item.name} rests on {region.anchor}, whose rotation changes between scenes or is not upright")
+
+
+def _drawn_bounds(item: CandidateObject, anchor: tuple[np.ndarray, np.ndarray]) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+    """Bounds of an upright drawn box over every scene, as a centre's bounds and a reach: its footprint
+    within the plan's bounds (its half diagonal, or its fixed rotation's extents), its extent in z from
+    the face or floor up by its tallest height."""
+    assert item.bounds is not None
+    lo, hi = item.bounds[0].copy(), item.bounds[1].copy()
+    top = np.array([float(s.hi[0]) for s in item.sizes]) * 0.5
+    reach = np.full(3, float(np.hypot(top[0], top[1]))) if item.yaw is not None else np.abs(item.rotation) @ top
+    reach[2] = top[2]
+    floor = lo[2]  # the face or floor in the lowest scene (the plan's prism starts there)
+    lo[2], hi[2] = floor + top[2], floor + (anchor[1][2] - anchor[0][2]) + top[2]
+    return (lo, hi), reach
+
+
+def _own_draws(plan: CandidatePlan, drawn: dict[str, CandidateObject]) -> None:
+    """Unbatchable unless each drawn object's size and yaw read only draws of its own: the sweeps
+    redraw one object at a time from its prior, which must not move another's."""
+    seen: dict[int, str] = {}
+    for name, item in drawn.items():
+        state = CandidateState(np.arange(2, dtype=np.uint64))
+        try:
+            for value in (*item.sizes, *((item.yaw,) if item.yaw is not None else ())):
+                value.fn(state)
+        except (KeyError, TypeError):
+            raise Unbatchable(f"{name}'s size or yaw reads another object's position") from None
+        for draw_id in state.draws:
+            if seen.setdefault(draw_id, name) != name:
+                raise Unbatchable(f"{name}'s size or yaw shares a random value with {seen[draw_id]}'s")
 
 
 def _may_meet(k: int, j: int, items: list, bounds: dict[str, tuple[np.ndarray, np.ndarray]],
@@ -119,62 +240,94 @@ class GroupGibbs:
         self.runtimes = runtimes
         self.sweeps = sweeps
         self._index = {obj.name: k for k, obj in enumerate(objects)}
+        # Scenes drawn together: how many changes the cost, never a scene (each reads its own stream).
+        self.chunk = DRAWN_CHUNK if any(o.drawn is not None for o in objects) else CHUNK
 
     def draw(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
         """Scenes `indices` of `seed`."""
         out: list[SceneResult] = []
-        for first in range(0, len(indices), CHUNK):
-            out += self._chunk(seed, [int(i) for i in indices[first:first + CHUNK]])
+        for first in range(0, len(indices), self.chunk):
+            out += self._chunk(seed, [int(i) for i in indices[first:first + self.chunk]])
         return out
 
     def _chunk(self, seed: int, indices: list[int]) -> list[SceneResult]:
         keys = scene_keys(seed, np.asarray(indices, dtype=np.uint64))
-        positions = self._start(seed, indices, keys)
+        boxes = self._start(seed, indices, keys)
+        every = np.arange(len(keys))
         for sweep in range(self.sweeps):
             for k, obj in enumerate(self.objects):
-                if obj.movable:
-                    positions[k] = self._redraw(k, STARTS + sweep, keys, positions, obj.partners)
-        return [self._result(positions, i, seed, index) for i, index in enumerate(indices)]
+                if not obj.movable:
+                    continue
+                if obj.drawn is not None:
+                    drawn, found = self._propose(k, STARTS + sweep, keys, boxes, obj.partners)
+                    boxes.set(k, every[found], drawn, np.flatnonzero(found))  # where none is free it stays
+                else:
+                    boxes.positions[k] = self._redraw(k, STARTS + sweep, keys, boxes, obj.partners)
+        return self._results(boxes, seed, indices)
 
-    def _start(self, seed: int, indices: list[int], keys: np.ndarray) -> list[np.ndarray]:
+    def _boxes(self, m: int) -> _Boxes:
+        """A chunk's boxes before the start: fixed boxes as they are, drawn ones empty."""
+        per_scene = tuple(o.drawn is not None for o in self.objects)
+        def each(fixed: list[np.ndarray], shape: tuple[int, ...]) -> list[np.ndarray]:
+            return [np.zeros((m,) + shape) if own else a for a, own in zip(fixed, per_scene)]
+        return _Boxes([np.zeros((m, 3)) for _ in self.objects], each([o.rotation for o in self.objects], (3, 3)),
+                      each([o.half for o in self.objects], (3,)), each([o.reach for o in self.objects], (3,)),
+                      [{} for _ in self.objects], per_scene)
+
+    def _start(self, seed: int, indices: list[int], keys: np.ndarray) -> _Boxes:
         """Objects in order, each from its region minus the earlier boxes; a dead end starts that scene again."""
         m = len(keys)
-        positions = [np.zeros((m, 3)) for _ in self.objects]
+        boxes = self._boxes(m)
         todo = np.arange(m)
         for attempt in range(STARTS):
             stuck = np.zeros(len(todo), dtype=bool)
-            sub, try_keys = [p[todo] for p in positions], keys[todo]  # the scenes this start is for
+            sub, try_keys = boxes.rows(todo), keys[todo]  # the scenes this start is for
+            every = np.arange(len(todo))
             for k, obj in enumerate(self.objects):
                 earlier = tuple(j for j in obj.partners if j < k)
-                if obj.prepared.point is not None:
+                if obj.drawn is not None:
+                    drawn, found = self._propose(k, attempt, try_keys, sub, earlier)
+                    stuck |= ~found
+                    sub.set(k, every[found], drawn, np.flatnonzero(found))
+                    continue
+                if obj.prepared is not None and obj.prepared.point is not None:
                     placed = np.broadcast_to(obj.prepared.point, (len(todo), 3)).copy()
                     if obj.anchor is not None:
-                        placed = placed + sub[self._index[obj.anchor]]
-                    stuck |= self._hits(k, placed[:, None, :], sub, earlier)[:, 0]
+                        placed = placed + sub.positions[self._index[obj.anchor]]
+                    stuck |= self._hits(k, placed[:, None, :], None, sub, earlier)[:, 0]
                 else:
                     placed, dead = self._draw(k, attempt, try_keys, sub, earlier)
                     stuck |= dead
-                sub[k] = placed
-            for k, placed in enumerate(sub):
-                positions[k][todo] = placed
+                sub.positions[k] = placed
+            done = ~stuck
+            rows = todo[done]
+            for k in range(len(self.objects)):
+                boxes.positions[k][rows] = sub.positions[k][done]
+                if boxes.per_scene[k]:
+                    boxes.rotations[k][rows], boxes.halves[k][rows] = sub.rotations[k][done], sub.halves[k][done]
+                    boxes.reaches[k][rows] = sub.reaches[k][done]
+                    for draw_id, values in sub.draws[k].items():
+                        boxes.draws[k].setdefault(draw_id, np.zeros((m, 1)))[rows] = values[done]
             todo = todo[stuck]
             if not len(todo):
-                return positions
+                return boxes
         raise PrscError(f"could not sample scene {indices[int(todo[0])]} (seed {seed}): every start of the Gibbs "
                         f"sweeps met a dead end ({STARTS} starts)")
 
-    def _redraw(self, k: int, stage: int, keys: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...]) -> np.ndarray:
-        placed, dead = self._draw(k, stage, keys, positions, partners)
+    def _redraw(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...]) -> np.ndarray:
+        placed, dead = self._draw(k, stage, keys, boxes, partners)
         # Its own place is free, so the free space is empty only by rounding: it stays where it is.
-        placed[dead] = positions[k][dead]
+        placed[dead] = boxes.positions[k][dead]
         return placed
 
-    def _draw(self, k: int, stage: int, keys: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...]
+    def _draw(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...]
               ) -> tuple[np.ndarray, np.ndarray]:
-        """Object k uniform on its region minus the partners' boxes, per scene: (centres, which scenes found none)."""
+        """Fixed box k uniform on its region minus the partners' boxes, per scene: (centres, which scenes found none)."""
         obj = self.objects[k]
+        assert obj.prepared is not None
         sampler = obj.prepared.sampler
         assert sampler is not None
+        positions = boxes.positions
         m, width = len(keys), sampler.dim + 1
         total = sum(PROPOSALS)
         u = uniforms(keys, _SITE + 2 * (stage * len(self.objects) + k), (total + 1) * width)
@@ -185,7 +338,7 @@ class GroupGibbs:
         for size in PROPOSALS:  # the first free proposal by number: how they are batched changes the cost only
             block = u[pending, first * width:(first + size) * width].reshape(len(pending) * size, width)
             proposals = sampler.points(block).reshape(len(pending), size, 3) + shift[pending][:, None, :]
-            free = ~self._hits(k, proposals, [p[pending] for p in positions], partners)
+            free = ~self._hits(k, proposals, None, boxes.rows(pending), partners)
             found = free.any(axis=1)
             out[pending[found]] = proposals[np.flatnonzero(found), free.argmax(axis=1)[found]]
             pending = pending[~found]
@@ -195,52 +348,172 @@ class GroupGibbs:
         dead = np.zeros(m, dtype=bool)
         for i in pending:
             try:
-                region = self._free_space(k, shift[i] if obj.anchor is not None else None, [p[i] for p in positions], partners)
+                region = self._free_space(k, shift[i] if obj.anchor is not None else None, boxes, int(i), partners)
             except EmptyRegionError:
                 dead[i] = True
                 continue
             out[i] = region.points(u[i:i + 1, total * width:total * width + region.dim + 1])[0]
         return out, dead
 
-    def _free_space(self, k: int, shift: np.ndarray | None, centres: list[np.ndarray], partners: tuple[int, ...]) -> UniformSampler:
-        """The exact free space of object k in one scene: its region minus the partners' Minkowski obstacles."""
+    def _propose(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...]
+                 ) -> tuple[_Drawn, np.ndarray]:
+        """Drawn box k proposed afresh (size, yaw, centre) as the rejection reference draws it, per scene the
+        first proposal that meets no partner's box: (the kept proposals, one row per scene; which scenes found one)."""
         obj = self.objects[k]
-        boxes = [PlacedBox(self.objects[j].name, j, centres[j], self.objects[j].rotation, self.objects[j].half, False)
-                 for j in partners]
-        return obj.prepared.free_space(shift, obstacles_for(boxes, obj.rotation, obj.half))
+        item = obj.drawn
+        assert item is not None
+        m = len(keys)
+        kept = _Drawn(np.zeros((m, 3)), np.zeros((m, 3, 3)), np.zeros((m, 3)), np.zeros((m, 3)), {})
+        found = np.zeros(m, dtype=bool)
+        pending = np.arange(m)
+        first = _PROPOSAL_BASE + (stage * len(self.objects) + k) * sum(DRAWN_PROPOSALS)
+        partners_of_all = self._partner_boxes(boxes, partners)
+        upright = obj.upright and all(self.objects[j].upright for j in partners)
+        for size in DRAWN_PROPOSALS:  # the first free proposal by number: how they are batched changes the cost only
+            state = CandidateState(candidate_keys(keys[pending], first, size))
+            n = len(state.keys)
+            anchor = item.region.anchor
+            if anchor is not None:  # the anchor is a fixed box: its rotation and size are the same in every scene
+                a = self._index[anchor]
+                state.positions[anchor] = np.repeat(boxes.positions[a][pending], size, axis=0)
+                state.rotations[anchor] = np.broadcast_to(boxes.rotations[a], (n, 3, 3))
+                state.dims[anchor] = np.broadcast_to(2.0 * boxes.halves[a], (n, 3))
+            valid = draw_box(item, obj.site, state)
+            rotations, halves = state.rotations[item.name], state.dims[item.name] * 0.5
+            reaches = np.einsum("nij,nj->ni", np.abs(rotations), halves)
+            shape = (len(pending), size)
+            centres = state.positions[item.name]
+            others = partners_of_all if len(pending) == m else tuple(a[pending] for a in partners_of_all)
+            free = valid.reshape(shape) & ~self._drawn_hits(
+                k, centres.reshape(shape + (3,)), rotations.reshape(shape + (3, 3)), halves.reshape(shape + (3,)),
+                reaches.reshape(shape + (3,)), valid.reshape(shape), others, upright)
+            hit = free.any(axis=1)
+            rows = np.flatnonzero(hit) * size + free.argmax(axis=1)[hit]
+            scenes = pending[hit]
+            kept.positions[scenes], kept.rotations[scenes], kept.halves[scenes] = centres[rows], rotations[rows], halves[rows]
+            kept.reaches[scenes] = reaches[rows]
+            for draw_id, values in state.draws.items():
+                kept.draws.setdefault(draw_id, np.zeros((m, 1)))[scenes] = values[rows] if len(values) > 1 else values[0]
+            found[scenes] = True
+            pending = pending[~hit]
+            first += size
+            if not len(pending):
+                break
+        return kept, found
 
-    def _hits(self, k: int, centres: np.ndarray, positions: list[np.ndarray], partners: tuple[int, ...]) -> np.ndarray:
-        """Which of object k's boxes at `centres` (m, s, 3: s per scene) collide with a partner's box in its
-        scene (positions[j] (m, 3)): the broad phase broadcast over the scene's s boxes, which decides for
-        two axis-aligned boxes; collisions.collide_pairs for the close pairs of the others."""
-        obj = self.objects[k]
-        hit = np.zeros(centres.shape[:2], dtype=bool)
-        for j in partners:
-            other = self.objects[j]
-            gap = np.abs(centres - positions[j][:, None, :])
-            reach = obj.reach + other.reach - CONTACT_TOL
-            close = (gap[:, :, 0] < reach[0]) & (gap[:, :, 1] < reach[1]) & (gap[:, :, 2] < reach[2]) & ~hit
-            if obj.aligned and other.aligned:
-                hit |= close
-                continue
-            scenes, boxes = np.nonzero(close)
-            if len(scenes):
-                hit[scenes, boxes] = collide_pairs(centres[scenes, boxes], obj.rotation, obj.half, positions[j][scenes],
-                                                   other.rotation, other.half, obj.reach + other.reach,
-                                                   obj.upright and other.upright)
+    def _partner_boxes(self, boxes: _Boxes, partners: tuple[int, ...]) -> tuple[np.ndarray, ...]:
+        """The partners' boxes of every scene, stacked: centres, reaches, half extents (m, P, 3), rotations (m, P, 3, 3)."""
+        m = len(boxes.positions[0])
+        if not partners:
+            return np.zeros((m, 0, 3)), np.zeros((m, 0, 3)), np.zeros((m, 0, 3)), np.zeros((m, 0, 3, 3))
+
+        def stack(arrays: list[np.ndarray], shape: tuple[int, ...]) -> np.ndarray:
+            return np.stack([a if boxes.per_scene[j] else np.broadcast_to(a, (m,) + shape) for j, a in zip(partners, arrays)],
+                            axis=1)
+
+        return (np.stack([boxes.positions[j] for j in partners], axis=1), stack([boxes.reaches[j] for j in partners], (3,)),
+                stack([boxes.halves[j] for j in partners], (3,)), stack([boxes.rotations[j] for j in partners], (3, 3)))
+
+    def _drawn_hits(self, k: int, centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, reaches: np.ndarray,
+                    live: np.ndarray, others: tuple[np.ndarray, ...], upright: bool) -> np.ndarray:
+        """Which of drawn box k's live proposals (m, s, ...: s per scene) collide with a partner's box in their
+        scene (`others`: `_partner_boxes` of those scenes): one broad phase over every (proposal, partner) pair,
+        one SAT call for the close pairs."""
+        hit = np.zeros(live.shape, dtype=bool)
+        positions, other_reach, other_half, other_rotation = others
+        if not positions.shape[1]:
+            return hit
+        # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
+        close = np.repeat(live[:, :, None], positions.shape[1], axis=2)  # (m, s, P)
+        for axis in range(3):
+            gap = np.abs(centres[:, :, None, axis] - positions[:, None, :, axis])
+            close &= gap < reaches[:, :, None, axis] + other_reach[:, None, :, axis] - CONTACT_TOL
+        scene, proposal, partner = np.nonzero(close)
+        if not len(scene):
+            return hit
+        overlaps = upright_overlaps if upright else pair_overlaps
+        pairs = overlaps(centres[scene, proposal], rotations[scene, proposal], halves[scene, proposal],
+                         positions[scene, partner], other_rotation[scene, partner], other_half[scene, partner]) > CONTACT_TOL
+        hit[scene[pairs], proposal[pairs]] = True
         return hit
 
-    def _result(self, positions: list[np.ndarray], i: int, seed: int, index: int) -> SceneResult:
-        """Scene i of a chunk as the sequential sampler returns it (properties from the scene's own Generator)."""
-        ctx = SceneContext(scene_rng(seed, index))
-        objects = []
-        for obj, rt, position in zip(self.objects, self.runtimes, positions):
-            plan = rt.plan
-            value = ObjectValue(plan.name, plan.class_name, plan.span, np.array(position[i]), obj.rotation, rt.dims,
-                                dict(plan.static_props), plan.property_fns)
-            ctx.objects[plan.name] = value
-            objects.append(value)
-        ctx.level = len(objects)
-        for rt, value in zip(self.runtimes, objects):
-            rt.finish(value, ctx)
-        return SceneResult(objects, evaluate_params(self.cprog, ctx), RejectionStats(scenes=1), ctx)
+    def _free_space(self, k: int, shift: np.ndarray | None, boxes: _Boxes, i: int, partners: tuple[int, ...]) -> UniformSampler:
+        """The exact free space of fixed box k in scene i: its region minus the partners' Minkowski obstacles."""
+        obj = self.objects[k]
+        assert obj.prepared is not None
+        placed = []
+        for j in partners:
+            rotation, half = boxes.rotations[j], boxes.halves[j]
+            if boxes.per_scene[j]:
+                rotation, half = rotation[i], half[i]
+            placed.append(PlacedBox(self.objects[j].name, j, boxes.positions[j][i], rotation, half, False))
+        return obj.prepared.free_space(shift, obstacles_for(placed, obj.rotation, obj.half))
+
+    def _hits(self, k: int, centres: np.ndarray, own: tuple[np.ndarray, np.ndarray, np.ndarray] | None, boxes: _Boxes,
+              partners: tuple[int, ...], live: np.ndarray | None = None) -> np.ndarray:
+        """Which of object k's boxes at `centres` (m, s, 3: s per scene) collide with a partner's box in its
+        scene: the broad phase broadcast over the scene's s boxes, which decides for two axis-aligned boxes;
+        collisions.collide_pairs for the close pairs of the others. `own`: a drawn box's rotations, half
+        extents and reaches per proposal (m, s, ...), else k's fixed box; `live`: the proposals worth testing."""
+        obj = self.objects[k]
+        hit = np.zeros(centres.shape[:2], dtype=bool) if live is None else ~live
+        rotation, half, reach = (obj.rotation, obj.half, obj.reach) if own is None else own
+        for j in partners:
+            other = self.objects[j]
+            position = boxes.positions[j]
+            gap = np.abs(centres - position[:, None, :])
+            other_reach = boxes.reaches[j][:, None, :] if boxes.per_scene[j] else boxes.reaches[j]
+            span = reach + other_reach - CONTACT_TOL
+            if span.ndim == 1:
+                close = (gap[:, :, 0] < span[0]) & (gap[:, :, 1] < span[1]) & (gap[:, :, 2] < span[2]) & ~hit
+            else:
+                close = np.all(gap < span, axis=2) & ~hit
+            if own is None and obj.aligned and other.aligned:
+                hit |= close
+                continue
+            scenes, boxes_at = np.nonzero(close)
+            if not len(scenes):
+                continue
+            if own is None and not boxes.per_scene[j]:  # two fixed boxes, as before drawn boxes joined
+                hit[scenes, boxes_at] = collide_pairs(centres[scenes, boxes_at], obj.rotation, obj.half, position[scenes],
+                                                      other.rotation, other.half, obj.reach + other.reach,
+                                                      obj.upright and other.upright)
+                continue
+            mine = (rotation, half, reach) if own is None else (rotation[scenes, boxes_at], half[scenes, boxes_at],
+                                                                 reach[scenes, boxes_at])
+            theirs = (boxes.rotations[j], boxes.halves[j], boxes.reaches[j])
+            if boxes.per_scene[j]:
+                theirs = tuple(a[scenes] for a in theirs)
+            hit[scenes, boxes_at] = collide_pairs(centres[scenes, boxes_at], mine[0], mine[1], position[scenes],
+                                                  theirs[0], theirs[1], mine[2] + theirs[2], obj.upright and other.upright)
+        return hit if live is None else hit & live
+
+    def _results(self, boxes: _Boxes, seed: int, indices: list[int]) -> list[SceneResult]:
+        """The chunk's scenes as the sequential sampler returns them (properties from each scene's own Generator,
+        a drawn box's size and yaw from the draws it kept)."""
+        positions = [p.tolist() for p in boxes.positions]
+        dims = [(2.0 * h).tolist() if own else None for h, own in zip(boxes.halves, boxes.per_scene)]
+        draws = [[(draw_id, values[:, 0].tolist()) for draw_id, values in d.items()] for d in boxes.draws]
+        out = []
+        for i, index in enumerate(indices):
+            ctx = SceneContext(scene_rng(seed, index))
+            objects = []
+            for k, (obj, rt) in enumerate(zip(self.objects, self.runtimes)):
+                plan = rt.plan
+                props = dict(plan.static_props)
+                if obj.drawn is None:
+                    rotation, size = obj.rotation, rt.dims
+                else:
+                    rotation, size = boxes.rotations[k][i].copy(), tuple(dims[k][i])  # type: ignore[index]
+                    props.update(zip(DIMENSIONS, size))
+                    for draw_id, values in draws[k]:
+                        ctx.draws[draw_id] = values[i]
+                value = ObjectValue(plan.name, plan.class_name, plan.span, np.array(positions[k][i]), rotation, size,
+                                    props, plan.property_fns)
+                ctx.objects[plan.name] = value
+                objects.append(value)
+            ctx.level = len(objects)
+            for rt, value in zip(self.runtimes, objects):
+                rt.finish(value, ctx)
+            out.append(SceneResult(objects, evaluate_params(self.cprog, ctx), RejectionStats(scenes=1), ctx))
+        return out

@@ -19,28 +19,30 @@ from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.errors import PrscError
 from prsc.ir.program import Program
 from prsc.task.bind import bind_task
-from prsc.sampling.batch_values import Unbatchable
-from prsc.sampling.batched import BatchedSampler, batch_plan
-from prsc.sampling.candidate_plan import candidate_plan
+from prsc.sampling.baseline_sampler import DEFAULT_ATTEMPTS, BaselineSampler
+from prsc.sampling.batched import BatchedSampler
 from prsc.sampling.candidates import CHUNK, CandidateSampler, Drawn
-from prsc.sampling.gibbs import DEFAULT_SWEEPS
-from prsc.sampling.group_gibbs import SWEEPS as GROUP_SWEEPS, GroupGibbs, group_plan
 from prsc.sampling.engine import Limits, SceneResult, SequentialSampler
+from prsc.sampling.gibbs import DEFAULT_SWEEPS
+from prsc.sampling.group_gibbs import GroupGibbs
 from prsc.sampling.proposal import Proposal
-from prsc.sampling.rejection import DEFAULT_ATTEMPTS, RejectionSampler
+from prsc.sampling.runtime import ObjectRuntime
+from prsc.sampling.sampler_plan import (
+    BASELINE, BATCHED, CANDIDATE_ROUNDS, GIBBS_ROUNDS, HIT_AND_RUN, REJECTION, SamplerPlan, sampler_plan,
+)
 from prsc.sampling.scene_json import json_value, object_template, placed_template, quaternion_wxyz, scene_dict, scene_json
 from prsc.sampling.scene_text import SceneText, scene_encoder
 from prsc.sampling.stats import RejectionStats
 
-SAMPLERS = ("exact", "hit-and-run", "rejection")
-# The law of a scene (docs/sampling.md): the joint one by Gibbs sweeps (default), objects one
-# at a time (sequential), or the joint one by whole-scene rejection (the exact reference).
-LAWS = ("joint", "sequential", "rejection")
+SAMPLERS = ("exact", HIT_AND_RUN, BASELINE)
+# The law of a scene (docs/sampling.md): the joint one (default), objects one at a time
+# (sequential), or the joint one by whole-scene rejection (the exact reference).
+LAWS = ("joint", "sequential", REJECTION)
 BATCH = 1024  # scenes per batch when drawing many (memory grows with it, not with n)
 
 
 class Sampler:
-    """A compiled spec that samples scenes."""
+    """A compiled spec that samples scenes; `plan` names the path its scenes take and why."""
 
     def __init__(
         self,
@@ -48,7 +50,6 @@ class Sampler:
         sampler: str = "exact",
         *,
         walk_length: int = 100,
-        joint: bool = False,
         law: str | None = None,
         sweeps: int = DEFAULT_SWEEPS,
         limits: Limits | None = None,
@@ -58,15 +59,15 @@ class Sampler:
         proposal: Proposal | None = None,
         batched: bool = True,
     ) -> None:
-        if proposal is not None and (sampler != "exact" or joint or law not in (None, "sequential")):
-            raise PrscError("--proposal draws with the exact sequential sampler (not with --sampler, --joint or another --law)")
+        if sampler == "rejection":
+            raise PrscError("--sampler rejection is now --sampler baseline (the paper's naive baseline); "
+                            "the joint law by whole-scene rejection is --law rejection")
+        if proposal is not None and (sampler != "exact" or law not in (None, "sequential")):
+            raise PrscError("--proposal draws with the exact sequential sampler (not with --sampler or another --law)")
         if sampler not in SAMPLERS:
             raise PrscError(f"unknown sampler {sampler!r} (choose from {', '.join(SAMPLERS)})")
         if walk_length < 1:
             raise PrscError(f"the hit-and-run walk length must be >= 1, got {walk_length}")
-        if joint and law not in (None, "rejection"):
-            raise PrscError(f"--joint is --law rejection: it does not combine with --law {law}")
-        law = "rejection" if joint else law  # `joint=True` is the older spelling
         if law is None:  # Gibbs sweeps need exact draws: hit-and-run (the paper's sampler) stays
             # sequential, and a falsification proposal reweights the sequential law (proposal.py)
             law = "joint" if proposal is None and sampler == "exact" else "sequential"
@@ -79,87 +80,41 @@ class Sampler:
         self.method = sampler
         self.spec = spec if spec is not None else program.path
         self.constraints = constraints if constraints is not None else lower_program(program)
-        self._engine: SequentialSampler | RejectionSampler
         # Objects whose properties never change get their JSON built once.
         self.templates: list[dict[str, Any] | None] = [
             object_template(plan.name, plan.class_name, plan.static_props, plan.span) if set(plan.property_fns) <= set(plan.static_props) else None
             for plan in self.constraints.objects
         ]
         self.classes: dict[str, list[str]] = {o.class_name: list(o.class_chain[1:]) for o in program.objects}
-        if sampler == "rejection":
-            self._engine = RejectionSampler(self.constraints, max_attempts)
+        self._engine: SequentialSampler | BaselineSampler
+        if sampler == BASELINE:
+            self._engine = BaselineSampler(self.constraints, max_attempts)
         else:
             self._engine = SequentialSampler(
-                self.constraints, sampler, walk_length, law == "rejection", limits, proposal, sweeps if law == "joint" else 0
+                self.constraints, sampler, walk_length, law == REJECTION, limits, proposal, sweeps if law == "joint" else 0
             )
-        # The batched sampler draws the same law (batched.py) from its own stream: every exact
-        # sequential or joint spec it can prove batchable (`batched=False`: one scene at a time).
-        self._batch: BatchedSampler | None = None
+        self.runtimes: list[ObjectRuntime] = self._engine.runtimes
+        self.plan: SamplerPlan = sampler_plan(self.constraints, self.runtimes, sampler, law, sweeps, proposal is not None, batched)
+        # What the plan's path draws with (the sequential sampler `_engine` draws every other path,
+        # and the scenes candidate rounds give up on).
+        self._batch = BatchedSampler(self.plan.batch) if self.plan.batch is not None else None
+        self._candidates = CandidateSampler(self.plan.candidates, self.constraints, self.runtimes) \
+            if self.plan.candidates is not None else None
+        self._group = GroupGibbs(self.plan.group, self.constraints, self.runtimes, self.plan.sweeps) \
+            if self.plan.group is not None else None
         self._text: SceneText | None = None  # the batched spec's JSON line template, built on first use
-        self.unbatched_because = "not asked for" if not batched else "only the exact sampler's sequential and joint laws batch"
-        if batched and isinstance(self._engine, SequentialSampler) and sampler == "exact" and law != "rejection" \
-                and proposal is None:
-            try:
-                self._batch = BatchedSampler(batch_plan(self.constraints, self._engine.runtimes))
-                self.unbatched_because = ""
-                # Batched objects keep one rotation in every scene.
-                self._quaternions = [quaternion_wxyz(o.rotation) for o in self._batch.plan.objects]
-            except Unbatchable as reason:
-                self.unbatched_because = str(reason)
-        # The joint law of a spec that does not batch: whole-scene rejection vectorised over
-        # candidates (candidates.py), Gibbs sweeps for the scenes where no candidate passes.
-        self._planned: CandidateSampler | None = None
-        self._group: GroupGibbs | None = None  # a packed spec's sweeps over many scenes, when the pilot fails
-        self._sweeps = sweeps
-        self._paying: bool | None = None  # whether candidate rounds pay: decided by a pilot on first use
-        self.no_candidates_because = "" if self._batch is not None else "not the joint law of the exact sampler"
-        if self._batch is None and batched and isinstance(self._engine, SequentialSampler) and sampler == "exact" \
-                and law == "joint" and proposal is None:
-            try:
-                runtimes = self._engine.runtimes
-                self._planned = CandidateSampler(candidate_plan(self.constraints, runtimes), self.constraints, runtimes)
-                self.no_candidates_because = ""
-            except Unbatchable as reason:
-                self.no_candidates_because = str(reason)
-
-    @property
-    def _candidates(self) -> CandidateSampler | None:
-        """The candidate sampler when candidate rounds draw this spec: planned, and paying (its pilot
-        draws scenes, so it runs when scenes are first asked for, not when a spec is checked)."""
-        if self._planned is None:
-            return None
-        if self._paying is None:
-            self._paying = self._planned.pays()
-            if not self._paying:
-                self.no_candidates_because = "too few candidates pass (a pilot of 8 scenes found fewer than 4)"
-                # A packed spec of fixed boxes: the Gibbs sweeps vectorised over scenes (group_gibbs.py).
-                try:
-                    objects = group_plan(self._planned.plan, self._planned.runtimes)
-                    sweeps = max(GROUP_SWEEPS, self._sweeps)
-                    self._group = GroupGibbs(objects, self.constraints, self._planned.runtimes, sweeps)
-                except Unbatchable as reason:
-                    self.no_candidates_because += f"; Gibbs sweeps one scene at a time: {reason}"
-        return self._planned if self._paying else None
-
-    @property
-    def gibbs_rounds(self) -> bool:
-        """Whether the joint law is drawn by Gibbs sweeps vectorised over scenes (group_gibbs.py)."""
-        return self._candidates is None and self._group is not None
-
-    @property
-    def chunked(self) -> bool:
-        """Whether `results` draws many scenes at once (candidate rounds or vectorised Gibbs sweeps)."""
-        return self._candidates is not None or self._group is not None
-
-    @property
-    def candidates(self) -> bool:
-        """Whether the joint law is drawn by candidate rounds first (`no_candidates_because` says why not)."""
-        return self._candidates is not None
+        if self._batch is not None:  # batched objects keep one rotation in every scene
+            self._quaternions = [quaternion_wxyz(o.rotation) for o in self._batch.plan.objects]
 
     @property
     def batched(self) -> bool:
-        """Whether scenes are drawn in batches (`unbatched_because` says why not)."""
-        return self._batch is not None
+        """Whether scenes are drawn in batches (`plan.why` says why not)."""
+        return self.plan.path == BATCHED
+
+    @property
+    def chunked(self) -> bool:
+        """Whether `results` draws many scenes at once (candidate or Gibbs rounds)."""
+        return self.plan.chunked
 
     def set_proposal(self, proposal: Proposal) -> None:
         """Draw the next scenes from `proposal` instead (a sampler built with one), keeping the compiled spec and its cut cells."""
@@ -169,24 +124,34 @@ class Sampler:
 
     def sample(self, seed: int, index: int) -> SceneResult:
         """Scene `index` under `seed` with its rejection statistics."""
-        if self._batch is None:
-            return self.results(seed, [index])[0]
-        state = self._batch.draw(seed, [index])
-        objects, ctx = self._batch.objects(state, 0, self._engine.runtimes)  # type: ignore[union-attr]
-        return SceneResult(objects, self._batch.params(state)[0], RejectionStats(scenes=1), ctx)
+        return self.results(seed, [index])[0]
 
     def results(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
-        """Scenes `indices` under `seed` with their statistics (an unbatched spec; candidate rounds at once)."""
-        if self._candidates is None:
-            if self._group is not None:
-                return self._group.draw(seed, indices)
-            return [self._engine.sample(seed, index) for index in indices]
-        return [self._settle(drawn, seed, index) for drawn, index in zip(self._candidates.draw(seed, indices), indices)]
+        """Scenes `indices` under `seed` with their statistics (candidate and Gibbs rounds draw them at once)."""
+        path = self.plan.path
+        if path == BATCHED:
+            assert self._batch is not None
+            state = self._batch.draw(seed, indices)
+            params = self._batch.params(state)
+            return [self._batch_result(state, i, params[i]) for i in range(len(indices))]
+        if path == CANDIDATE_ROUNDS:
+            assert self._candidates is not None
+            return [self._settle(drawn, seed, index) for drawn, index in zip(self._candidates.draw(seed, indices), indices)]
+        if path == GIBBS_ROUNDS:
+            assert self._group is not None
+            return self._group.draw(seed, indices)
+        return [self._engine.sample(seed, index) for index in indices]
+
+    def _batch_result(self, state: Any, i: int, params: dict[str, Any]) -> SceneResult:
+        """Scene i of a batch as the sequential sampler returns it."""
+        assert self._batch is not None
+        objects, ctx = self._batch.objects(state, i, self.runtimes)
+        return SceneResult(objects, params, RejectionStats(scenes=1), ctx)
 
     def each_result(self, seed: int, indices: Sequence[int]) -> Iterator[tuple[int, SceneResult]]:
-        """(index, result) for scenes `indices` of an unbatched spec, lazily: a chunk of scenes at a time
-        when candidate rounds or vectorised sweeps draw them, else one at a time."""
-        step = CHUNK if self.chunked else 1
+        """(index, result) for scenes `indices`, lazily: a chunk of scenes at a time on a chunked or
+        batched path, else one at a time."""
+        step = {CANDIDATE_ROUNDS: CHUNK, BATCHED: BATCH}.get(self.plan.path, 1) if self._group is None else self._group.chunk
         for first in range(0, len(indices), step):
             chunk = indices[first:first + step]
             yield from zip(chunk, self.results(seed, chunk))
@@ -199,14 +164,13 @@ class Sampler:
 
     def scene(self, seed: int, index: int) -> dict[str, Any]:
         """Scene `index` under `seed` as scene JSON (docs/scene-json.md)."""
-        if self._batch is not None:
-            return self.batch(seed, [index])[0]
-        return self.to_json(self.sample(seed, index), seed, index)
+        return self.batch(seed, [index])[0]
 
     def batch(self, seed: int, indices: Sequence[int]) -> list[dict[str, Any]]:
-        """Scenes `indices` under `seed` as scene JSON, drawn at once when the spec is batched."""
-        if self._batch is None:
+        """Scenes `indices` under `seed` as scene JSON, drawn at once on a batched or chunked path."""
+        if self.plan.path != BATCHED:
             return [self.to_json(result, seed, index) for result, index in zip(self.results(seed, indices), indices)]
+        assert self._batch is not None
         state = self._batch.draw(seed, indices)
         names = [o.name for o in self._batch.plan.objects]
         positions = [state.positions[name].tolist() for name in names]
@@ -232,35 +196,38 @@ class Sampler:
         return scene
 
     def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
-        """index -> scene JSON under `seed`; a batched spec draws the next `ahead` indices at once and
-        hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once."""
+        """index -> scene JSON under `seed`; a batched or chunked path draws the next indices at once
+        and hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once."""
+        path = self.plan.path
+        if path != BATCHED and not self.plan.chunked:
+            return functools.partial(self.scene, seed)
         drawn: dict[int, Any] = {}  # index -> scene JSON (batched) or a candidate round's Drawn
 
         def scene(index: int) -> dict[str, Any]:
-            if self._batch is None and not self.chunked:
-                return self.scene(seed, index)
             if index not in drawn:
                 drawn.clear()
                 # Candidate rounds and sweeps take 16 ahead: a worker asked for a few scenes draws few more.
-                chunk = range(index, index + (ahead if self._batch is not None else min(ahead, 16)))
+                chunk = range(index, index + (ahead if path == BATCHED else min(ahead, 16)))
                 # They hand over results, each made JSON (or its error raised) only when asked for: a scene
                 # that cannot be written does not take the scenes before it in the chunk with it.
-                if self._batch is not None:
+                if path == BATCHED:
                     drawn.update(zip(chunk, self.batch(seed, chunk)))
-                elif self._candidates is not None:
+                elif path == CANDIDATE_ROUNDS:
+                    assert self._candidates is not None
                     drawn.update(zip(chunk, self._candidates.draw(seed, chunk)))
                 else:
                     drawn.update(zip(chunk, self.results(seed, chunk)))
             value = drawn.pop(index)
-            return value if self._batch is not None else self.to_json(self._settle(value, seed, index), seed, index)
+            return value if path == BATCHED else self.to_json(self._settle(value, seed, index), seed, index)
 
         return scene
 
     def batch_lines(self, seed: int, indices: Sequence[int]) -> list[str]:
         """Scenes `indices` under `seed` as scene JSON lines, each ending in a newline (what `prsc sample` writes)."""
         encode = scene_encoder()
-        if self._batch is None or not self._batch.plan.fixed_params:
+        if self.plan.path != BATCHED or not self._batch.plan.fixed_params:  # type: ignore[union-attr]
             return [encode(scene) + "\n" for scene in self.batch(seed, indices)]
+        assert self._batch is not None
         objects = self._batch.plan.objects
         if self._text is None:
             self._text = SceneText(self.batch(0, [0])[0], [k for k, o in enumerate(objects) if o.fixed is None], encode)
@@ -270,7 +237,7 @@ class Sampler:
     def scenes(self, seed: int, indices: Iterable[int] | int, start: int = 0) -> Iterator[dict[str, Any]]:
         """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily, in batches."""
         chosen = range(start, start + indices) if isinstance(indices, int) else indices
-        if self._batch is None and not self.chunked:
+        if self.plan.path != BATCHED and not self.plan.chunked:
             for index in chosen:
                 yield self.scene(seed, index)
             return
@@ -287,7 +254,7 @@ class Sampler:
 def compile_sampler(
     path: str | os.PathLike[str], include_dirs: Sequence[str | os.PathLike[str]] = (), sampler: str = "exact", **opts: Any
 ) -> Sampler:
-    """Compile a .prs file into a Sampler (opts: walk_length, law, sweeps, joint, limits, max_attempts, proposal)."""
+    """Compile a .prs file into a Sampler (opts: walk_length, law, sweeps, limits, max_attempts, proposal, batched)."""
     from prsc.ir import compile_program
 
     program = compile_program(path, include_dirs)

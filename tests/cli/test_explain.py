@@ -55,7 +55,7 @@ def test_constraints_stage_is_the_default(capsys):
     text = _explain(capsys)
     assert text == _explain(capsys, "--stage", "constraints")
     assert text.startswith(f"spec: {TABLE_CUBE}\nevaluation order: table, r1, r2, tr_1, tr_2, c1, camera\n"
-                           "drawn in batches (docs/sampling.md, \"Batched sampling\")\n")
+                           "path: batched (no two objects interact and every value vectorises)\n")
     assert f"tr_1 (Tray) declared at {TABLE_CUBE}:14" in text
 
 

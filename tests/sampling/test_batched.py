@@ -40,7 +40,7 @@ def sampler() -> Sampler:
 
 
 def test_table_cube_is_batched(sampler):
-    assert sampler.batched, sampler.unbatched_because
+    assert sampler.batched, sampler.plan.why
     assert not compile_sampler(SPEC, batched=False).batched
 
 
@@ -152,7 +152,7 @@ def test_a_spec_that_is_not_batched_says_why(tmp_path, text, because):
     spec.write_text("from tabletop import *\n" + text)
     sampler = Sampler(compile_program(str(spec), ()), "exact")
     assert not sampler.batched
-    assert because in sampler.unbatched_because
+    assert because in sampler.plan.why
 
 
 def test_a_compile_worker_s_drawer_hands_out_the_same_scenes_in_any_order(sampler):

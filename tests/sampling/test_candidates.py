@@ -27,15 +27,15 @@ TRAY = REPO / "tests" / "sampling" / "data" / "tray_four_cubes.prs"
 def test_which_specs_candidate_rounds_draw():
     """Random sizes and yaws in a container and on a tray, `facing toward` from a fixed region or a random
     `at` point, `visible from` a camera are drawn by candidates; `stably on` is not."""
-    assert compile_sampler(BIN).candidates
-    assert compile_sampler(TRAY).candidates
-    assert compile_sampler(REPO / "specs" / "facing_toward.prs").candidates
-    assert compile_sampler(REPO / "specs" / "camera_view.prs").candidates
-    assert compile_sampler(REPO / "specs" / "table_cube_reach.prs").candidates  # `reachable by`: hole and gap tested
+    assert compile_sampler(BIN).plan.path == "candidate rounds"
+    assert compile_sampler(TRAY).plan.path == "candidate rounds"
+    assert compile_sampler(REPO / "specs" / "facing_toward.prs").plan.path == "candidate rounds"
+    assert compile_sampler(REPO / "specs" / "camera_view.prs").plan.path == "candidate rounds"
+    assert compile_sampler(REPO / "specs" / "table_cube_reach.prs").plan.path == "candidate rounds"  # `reachable by`: hole and gap tested
     stack = compile_sampler(REPO / "specs" / "stack_and_cube.prs")
-    assert not stack.candidates and "stably" in stack.no_candidates_because
-    assert not compile_sampler(BIN, law="sequential").candidates  # only the joint law
-    assert not compile_sampler(BIN, batched=False).candidates  # one scene at a time: Gibbs sweeps
+    assert stack.plan.path == "sequential + sweeps" and "stably" in stack.plan.why
+    assert compile_sampler(BIN, law="sequential").plan.path != "candidate rounds"  # only the joint law
+    assert compile_sampler(BIN, batched=False).plan.path != "candidate rounds"  # one scene at a time: Gibbs sweeps
 
 
 @pytest.mark.parametrize("spec", [BIN, TRAY])
@@ -76,15 +76,15 @@ def test_a_packed_spec_is_left_to_gibbs_sweeps_by_the_pilot():
     (here run over many scenes at once: test_group_gibbs.py)."""
     sampler = compile_sampler(REPO / "specs" / "ten_cubes_tray.prs")
     sampler.scene(0, 0)
-    assert not sampler.candidates and sampler.gibbs_rounds
-    assert "pilot" in sampler.no_candidates_because
+    assert sampler.plan.path == "Gibbs rounds"
+    assert "pilot" in sampler.plan.why
 
 
 def test_a_scene_without_a_passing_candidate_is_the_gibbs_samplers(monkeypatch):
     """With a budget of 4 candidates most bin_picking scenes find none: those are drawn by the
     Gibbs sweeps (the same scene as without candidate rounds), the others are candidates."""
     sampler = compile_sampler(BIN)
-    assert sampler.candidates  # the pilot ran with the real budget
+    assert sampler.plan.path == "candidate rounds"  # the pilot ran with the real budget
     monkeypatch.setattr(candidates, "BUDGET", 4)
     gibbs = compile_sampler(BIN, batched=False)
     results = sampler.results(0, range(12))
@@ -133,7 +133,7 @@ def test_reachable_by_is_uniform_on_the_table_within_the_ring_less_its_hole(tmp_
     spec = tmp_path / "reach.prs"
     spec.write_text(REACH_SPEC)
     sampler = compile_sampler(spec)
-    assert sampler.candidates
+    assert sampler.plan.path == "candidate rounds"
     drawn = _reach_draws(sampler.batch(3, list(range(2000))))
     scene = sampler.scene(3, 0)
     objects = {o["name"]: o for o in scene["objects"]}
@@ -163,7 +163,7 @@ def test_a_carried_region_tested_against_a_reach_ring_follows_the_gibbs_sweeps()
 
     spec = REPO / "specs" / "table_cube_reach.prs"
     sampler = compile_sampler(spec)
-    assert sampler.candidates
+    assert sampler.plan.path == "candidate rounds"
     drawn = sampler.batch(4, list(range(2000)))
     gibbs = compile_sampler(spec, batched=False)
     reference = [gibbs.scene(5, k) for k in range(300)]

@@ -25,7 +25,7 @@ def test_sample_prints_one_scene_per_line(capsys):
 
 def test_sample_to_a_file_and_other_samplers(tmp_path, capsys):
     out = tmp_path / "scenes.jsonl"
-    assert main(["sample", NAIVE, "-n", "2", "--start", "5", "--sampler", "rejection", "-o", str(out), "--stats"]) == 0
+    assert main(["sample", NAIVE, "-n", "2", "--start", "5", "--sampler", "baseline", "-o", str(out), "--stats"]) == 0
     captured = capsys.readouterr()
     assert captured.out == "" and "require" in captured.err
     assert [json.loads(line)["index"] for line in out.read_text().splitlines()] == [5, 6]
@@ -67,7 +67,7 @@ def test_bench_json_reports_every_sampler(capsys):
     assert set(report) == {TABLE_CUBE, NAIVE}
     for spec, per in report.items():
         # Both specs are batched: each exact law also one scene at a time, side by side.
-        assert set(per) == {"exact/joint", "exact/sequential", "exact/rejection", "hit-and-run", "rejection",
+        assert set(per) == {"exact/joint", "exact/sequential", "exact/rejection", "hit-and-run", "baseline",
                             "exact/joint, one at a time", "exact/sequential, one at a time"}
         for name, r in per.items():
             assert r["scenes"] == 5 and r["scenes_per_s"] > 0 and r["peak_memory_mb"] > 0
@@ -75,7 +75,7 @@ def test_bench_json_reports_every_sampler(capsys):
             assert r["ks_statistic"] is None  # 5 reference scenes: too few for a distance
         # Table-Cube's objects do not interact: the joint law needs no sweeps, nothing is rejected.
         assert per["exact/joint"]["rejections_per_scene"] == per["exact/sequential"]["rejections_per_scene"] == 0
-        assert per["rejection"]["rejections_per_scene"] > 10
+        assert per["baseline"]["rejections_per_scene"] > 10
 
 
 def test_bench_reports_the_distance_to_the_rejection_reference(capsys):

@@ -77,17 +77,17 @@ def test_worker_processes_draw_the_same_scenes():
 
 
 def test_every_sampler_is_deterministic():
-    for name in ("hit-and-run", "rejection"):
+    for name in ("hit-and-run", "baseline"):
         a, b = compile_sampler(SPEC, sampler=name), compile_sampler(SPEC, sampler=name)
         assert _dump(a.scene(1, 2)) == _dump(b.scene(1, 2))
 
 
 def test_candidate_and_gibbs_rounds_give_the_same_scenes_under_jobs(tmp_path):
-    """bin_picking (candidate rounds) and ten_cubes_tray (Gibbs rounds): `prsc compile --jobs 2` writes the
+    """bin_picking (candidate rounds), ten_cubes_tray and bin_ten_parts (Gibbs rounds, boxes fixed and drawn): `prsc compile --jobs 2` writes the
     scenes `prsc sample` draws in one process, and a later start draws the same scene k."""
     from prsc.cli import main
 
-    for name in ("bin_picking", "ten_cubes_tray"):
+    for name in ("bin_picking", "ten_cubes_tray", "bin_ten_parts"):
         spec = str(REPO / "specs" / f"{name}.prs")
         lines = tmp_path / f"{name}.jsonl"
         assert main(["sample", spec, "-n", "6", "--seed", "4", "-o", str(lines)]) == 0

@@ -65,7 +65,7 @@ def test_joint_law_differs_from_sequential_and_matches_a_reference(tmp_path):
         "b = Cube with width 0.2, completely on t\n"
     )
     seq, _ = _sampler(tmp_path, text, law="sequential")
-    joint, program = _sampler(tmp_path, text, joint=True)
+    joint, program = _sampler(tmp_path, text, law="rejection")
     gibbs, _ = _sampler(tmp_path, text)  # the default law: the joint one, by Gibbs sweeps
     n, k = 3000, 8
     edges = np.linspace(-0.2, 0.2, k + 1)
@@ -127,7 +127,7 @@ def test_baseline_counts_rejections_by_cause_and_exact_rejects_nothing():
     naive = compile_program(str(ORIGINAL / "tableCubeNaive.prs"), ())
     for prog, causes in ((program, ("relative position", "containment")), (naive, ("require",))):
         base, exact = RejectionStats(), RejectionStats()
-        rej_sampler, exact_sampler = Sampler(prog, "rejection"), Sampler(prog, "exact")
+        rej_sampler, exact_sampler = Sampler(prog, "baseline"), Sampler(prog, "exact")
         for i in range(20):
             base.merge(rej_sampler.sample(2, i).stats)
             exact.merge(exact_sampler.sample(2, i).stats)
@@ -145,7 +145,7 @@ def test_many_specifiers_spec_is_valid_under_exact_and_hit_and_run():
         assert not report, (name, report)
 
 
-@pytest.mark.parametrize("name", ["exact", "rejection"])
+@pytest.mark.parametrize("name", ["exact", "baseline"])
 def test_a_solver_failure_while_sampling_is_an_error_at_the_object(tmp_path, monkeypatch, name):
     """A region rebuilt per scene (random table size) whose LP fails numerically: exit 2 at the object."""
     from prsc.geometry.exceptions import GeometryError
@@ -163,14 +163,14 @@ def test_a_solver_failure_while_sampling_is_an_error_at_the_object(tmp_path, mon
 
 
 def test_the_failure_message_counts_the_attempts_really_made(tmp_path):
-    """With --joint the work budget ends a hopeless scene long before 100000 attempts: say so."""
+    """With --law rejection the work budget ends a hopeless scene long before 100000 attempts: say so."""
     import re
 
     sampler, _ = _sampler(
         tmp_path,
         "t = Table on Vector3D(0, 0, 0), with width (0.2, 0.3), with length (0.2, 0.3)\n"
         "c = Cube completely on t, with width 1.0, with length 1.0\n",
-        joint=True,
+        law="rejection",
     )
     with pytest.raises(PrscError) as info:
         sampler.sample(0, 0)

@@ -24,7 +24,7 @@ def test_ten_cubes_are_drawn_by_vectorised_sweeps_and_hold_the_spec():
     program = compile_program(str(TEN))
     sampler = Sampler(program, "exact")
     scenes = sampler.batch(7, range(64))
-    assert sampler.gibbs_rounds and not sampler.candidates
+    assert sampler.plan.path == "Gibbs rounds"
     report = check_scenes(program, iter(scenes))
     assert not report, report
     assert report.checked >= 64 * len(program.objects)
@@ -69,5 +69,5 @@ def test_a_group_that_may_meet_an_outside_box_is_left_to_the_scalar_sweeps(tmp_p
     spec.write_text(TEN.read_text() + "block = Cube completely on table, with width 0.05, with length 0.05, with height 0.2\n")
     sampler = compile_sampler(spec)
     sampler.scene(0, 0)
-    assert not sampler.gibbs_rounds and not sampler.candidates
-    assert "meets objects outside it" in sampler.no_candidates_because
+    assert sampler.plan.path == "sequential + sweeps"
+    assert "meets objects outside it" in sampler.plan.why

@@ -83,10 +83,10 @@ def test_the_sequential_law_fails_the_same_test(samples, reference, spec):
     assert min(pvalues) < P_MIN, np.round(pvalues, 4)
 
 
-def test_the_default_law_is_the_joint_one_and_joint_spells_rejection():
+def test_the_default_law_is_the_joint_one():
     spec = DATA / "aligned_cups.prs"
     assert compile_sampler(spec).law == "joint"
-    assert compile_sampler(spec, joint=True).law == "rejection"
+    assert compile_sampler(spec, law="rejection").plan.path == "rejection"
     # Scene k is a function of (spec, seed, k): the same alone or after other scenes.
     a, b = compile_sampler(spec), compile_sampler(spec)
     for i in range(3):
@@ -127,5 +127,5 @@ def test_the_default_law_is_tested_on_both_of_its_samplers():
     and the cups' also by the Gibbs sweeps alone, so the KS tests above check both samplers."""
     for spec in SPECS:
         sampler = compile_sampler(DATA / f"{spec}.prs")
-        assert sampler.candidates and not sampler.batched, sampler.no_candidates_because
-    assert not compile_sampler(DATA / "aligned_cups.prs", batched=False).candidates
+        assert sampler.plan.path == "candidate rounds", sampler.plan.why
+    assert compile_sampler(DATA / "aligned_cups.prs", batched=False).plan.path == "sequential + sweeps"

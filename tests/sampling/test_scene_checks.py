@@ -68,7 +68,7 @@ REJECTION_PRACTICAL = {"tableCube.prs", "tableCubeNaive.prs", "table_cube.prs"}
 def test_baseline_samplers_satisfy_every_relation(program):
     names = ["hit-and-run"]
     if Path(program.path).name in REJECTION_PRACTICAL:
-        names.append("rejection")
+        names.append("baseline")
     for name in names:
         sampler = Sampler(program, name)
         n_scenes = 10 // DENSE.get(Path(program.path).name, 1)
@@ -78,7 +78,7 @@ def test_baseline_samplers_satisfy_every_relation(program):
 
 def test_rejection_baseline_gives_up_with_statistics_on_a_tight_spec():
     program = compile_program(str(REPO / "specs" / "shelf_bin.prs"), ())
-    sampler = Sampler(program, "rejection", max_attempts=2000)
+    sampler = Sampler(program, "baseline", max_attempts=2000)
     with pytest.raises(PrscError, match=r"in 2000 attempts; rejections: .*containment \d+"):
         sampler.scene(3, 0)
 

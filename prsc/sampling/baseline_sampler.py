@@ -1,4 +1,4 @@
-"""The paper's naive baseline: whole-scene rejection sampling.
+"""The paper's naive baseline (`--sampler baseline`): whole-scene rejection from base regions.
 
 Each object's position is drawn uniformly from its base region: the workspace's bounding
 box, cut by its equalities (`at`, `aligned with`, ...) and, for `on X`, X's surface (as
@@ -26,7 +26,7 @@ from prsc.sampling.stats import RejectionStats
 DEFAULT_ATTEMPTS = 1_000_000
 
 
-class RejectionSampler:
+class BaselineSampler:
     """Whole-scene rejection from base regions, counting rejections by cause."""
 
     def __init__(self, cprog: ConstraintProgram, max_attempts: int = DEFAULT_ATTEMPTS) -> None:
@@ -67,7 +67,7 @@ class RejectionSampler:
                 return SceneResult([ctx.objects[rt.plan.name] for rt in self.runtimes], params, stats, ctx)
             stats.add(cause)
         raise PrscError(
-            f"rejection sampling found no scene {index} (seed {seed}) in {self.max_attempts} attempts; "
+            f"the baseline found no scene {index} (seed {seed}) in {self.max_attempts} attempts; "
             f"rejections: {stats.summary()}"
         )
 
@@ -88,7 +88,7 @@ class RejectionSampler:
             return CONTAINMENT  # its equalities put it outside the workspace's bounding box
         except UnboundedRegionError as error:
             raise PrscError(
-                f"rejection sampling needs a bounded region to draw {rt.plan.name} from: add a workspace", rt.plan.span
+                f"the baseline needs a bounded region to draw {rt.plan.name} from: add a workspace", rt.plan.span
             ) from error
         p = region.draw(ctx.rng, "exact", 0)
         obj.position = p if shift is None else p + shift
