@@ -44,6 +44,17 @@ def build_root() -> Path:
     return Path(root) if root else Path(__file__).resolve().parents[2] / "build"
 
 
+def build_folder_error(error: OSError) -> PrscError | None:
+    """`cannot write the build folder ROOT: ...` for an OSError met writing under it (a read-only
+    or full build folder), else None: the build folder is prsc's cache, not the user's output."""
+    root = build_root()
+    if not error.filename or not os.path.abspath(os.fspath(error.filename)).startswith(str(root.absolute()) + os.sep):
+        return None
+    reason = os.strerror(error.errno) if error.errno else str(error)
+    return PrscError(f"cannot write the build folder {root}: {error.filename}: {reason}; "
+                     "point PRSC_BUILD_DIR at a writable folder")
+
+
 def _converted_meshes() -> Path:
     """Where OBJ copies of the meshes MuJoCo cannot decode go (prsc.user_assets.urdf_source)."""
     return build_root() / "assets" / "converted"

@@ -5,7 +5,7 @@ its own. A worker node killed mid-campaign loses no episode; a cluster left with
 reported and given up on; a campaign that fails before its first episode leaves nothing.
 
 Small on purpose (`make test` runs it): episodes of a controller that steps 0.2 s, renders a
-camera image (GL on the node) and sleeps 1 s of wall time, so a kill lands mid-campaign while
+camera image (GL on the node) and sleeps 0.5 s of wall time, so a kill lands mid-campaign while
 costing little CPU."""
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def steady(scene, model, data):
     while data.time < 0.2:
         mujoco.mj_step(model, data)
     image = OffscreenRenderer(model, 32, 32).rgb(data, mujoco.MjvCamera())  # a camera: GL on the node
-    time.sleep(1.0)  # wall time, not CPU: a kill lands mid-campaign
+    time.sleep(0.5)  # wall time, not CPU: a kill lands mid-campaign
     cube = model.body("a").id
     return {"outcome": "success", "reason": "", "height": round(float(data.xpos[cube][2]), 6),
             "image": list(image.shape)}
@@ -62,7 +62,10 @@ def _without_gl():
 def cluster():
     """A head node without CPUs; each test adds the worker nodes it kills."""
     with _without_gl():
-        made = Cluster(initialize_head=True, head_node_args={"num_cpus": 0, "object_store_memory": STORE})
+        # A killed node is found dead after 3 missed health checks 0.5 s apart (Ray's default: 5 of 3 s).
+        made = Cluster(initialize_head=True, head_node_args={
+            "num_cpus": 0, "object_store_memory": STORE,
+            "_system_config": {"health_check_period_ms": 500, "health_check_failure_threshold": 3}})
     yield made
     made.shutdown()
 
@@ -89,11 +92,17 @@ def _records(path: Path) -> list[dict]:
 
 
 @pytest.fixture(scope="module")
-def local_records(controller, tmp_path_factory) -> list[dict]:
+def local_run(controller, tmp_path_factory) -> Path:
+    """The campaign run locally: its output folder."""
     out = tmp_path_factory.mktemp("local") / "out"
     done = subprocess.run(_command(controller, out, "--jobs", "2"), capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    return _records(out / "results.jsonl")
+    return out
+
+
+@pytest.fixture(scope="module")
+def local_records(local_run) -> list[dict]:
+    return _records(local_run / "results.jsonl")
 
 
 class _Run:
@@ -166,18 +175,14 @@ def test_a_cluster_without_cpus_is_reported_and_given_up_on(cluster, controller,
     assert len({r["index"] for r in records}) == len(records)
 
 
-def test_a_failure_before_the_first_episode_leaves_nothing(cluster, controller, tmp_path):
+def test_a_failure_before_the_first_episode_leaves_nothing(cluster, controller, local_run, tmp_path):
     """On the cluster: scenes of which the second fails to compile there, and episodes whose GL
     backend cannot render (a MUJOCO_GL the nodes lack): exit code 2, and no output folder."""
     node = _add_node(cluster)
     try:
-        scenes = subprocess.run([sys.executable, "-m", "prsc.cli", "sample", str(CUBES), "-I", str(REPO / "specs"),
-                                 "-n", "2", "-o", str(tmp_path / "scenes.jsonl")], capture_output=True, text=True)
-        assert scenes.returncode == 0, scenes.stderr
-        lines = (tmp_path / "scenes.jsonl").read_text().splitlines()
-        broken = json.loads(lines[1])
+        first, broken = (json.loads((local_run / "three_cubes" / "json" / f"0000{k}.json").read_text()) for k in (0, 1))
         broken["objects"][1]["properties"] = {"texture": "nowhere.png"}  # found on the cluster, at scene 1
-        (tmp_path / "scenes.jsonl").write_text(lines[0] + "\n" + json.dumps(broken) + "\n")
+        (tmp_path / "scenes.jsonl").write_text(json.dumps(first) + "\n" + json.dumps(broken) + "\n")
         address = ["--executor", "ray", "--address", cluster.address]
         run = _Run(_command(controller, tmp_path / "bad_scene", *address, source=tmp_path / "scenes.jsonl"))
         code, stderr = run.finish()
