@@ -353,8 +353,10 @@ class RayExecutor:
             if self.address:
                 ray.init(address=self.address, log_to_driver=False, runtime_env=runtime_env)
             else:
-                ray.init(num_cpus=self.cpus or os.cpu_count(), include_dashboard=False, log_to_driver=False,
-                         runtime_env=runtime_env)
+                # "local": a cluster of its own, even where `ray start` (or another prsc) runs one
+                # on this machine, which ray.init would otherwise join (and refuse num_cpus).
+                ray.init(address="local", num_cpus=self.cpus or os.cpu_count(), include_dashboard=False,
+                         log_to_driver=False, runtime_env=runtime_env)
         except Exception as error:  # ConnectionError, TimeoutError, RuntimeError... all mean "no cluster"
             raise PrscError(f"cannot start or reach a Ray cluster{f' at {self.address}' if self.address else ''}: "
                             f"{type(error).__name__}: {error}") from None
