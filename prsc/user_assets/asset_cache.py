@@ -150,13 +150,13 @@ def bundle_copy(source: Path | str, folder: Path) -> str:
         digest.update(rel.encode() + b"\0" + hashlib.sha256(content).digest())
         contents.append((rel, content))
     target = folder / FILES / digest.hexdigest()[:16] / source.name
+    for rel, content in contents:  # a copy deleted from the cache is copied again
+        if not (target.parent / rel).is_file():
+            (target.parent / rel).parent.mkdir(parents=True, exist_ok=True)
+            atomic_write(target.parent / rel, content)
     if not target.is_file():
-        for rel, content in contents:
-            if not (target.parent / rel).is_file():
-                (target.parent / rel).parent.mkdir(parents=True, exist_ok=True)
-                atomic_write(target.parent / rel, content)
         target.parent.mkdir(parents=True, exist_ok=True)
-        atomic_write(target, data)  # the mesh last: it marks its folder complete
+        atomic_write(target, data)
     return target.relative_to(folder).as_posix()
 
 
