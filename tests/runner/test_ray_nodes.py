@@ -188,7 +188,7 @@ def test_a_failure_before_the_first_episode_leaves_nothing(cluster, controller, 
         code, stderr = run.finish()
         assert code == 2 and "nowhere.png" in stderr, stderr
         assert not (tmp_path / "bad_scene").exists()
-        run = _Run(_command(controller, tmp_path / "no_gl", *address), env={"MUJOCO_GL": "glfw"})
+        run = _Run(_command(controller, tmp_path / "no_gl", *address, "-n", "2"), env={"MUJOCO_GL": "glfw"})
         code, stderr = run.finish()
         assert code == 2 and "MUJOCO_GL='glfw'" in stderr, stderr
         assert not (tmp_path / "no_gl").exists()
