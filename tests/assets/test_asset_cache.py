@@ -54,37 +54,45 @@ def _mesh_paths(text: str) -> list[str]:
     return re.findall(r'(?:file|filename)="([^"]+)"', text)
 
 
-def test_robot_moved_edited_and_its_cache_damaged(tmp_path):
-    """One robot (unscaled, and scaled: a copy in the build folder) as a user's CI meets it.
-    Compiled from one folder, that folder deleted, then compiled from a copy elsewhere: it works
-    the first time, and no file in the build folder names the first folder. A mesh replaced
-    under the unchanged URDF: the next compile's MJCF and URDF carry the new mesh. Mesh copies
-    deleted from the build folder: the entries are rebuilt, not trusted."""
+def test_robot_folder_deleted_then_compiled_from_another(tmp_path):
+    """One robot (unscaled, and scaled: a copy in the build folder) as a user's CI meets it:
+    compiled from one folder, that folder deleted and the cache cleaned in part, then compiled
+    from a copy elsewhere: it works the first time, the cache's entries are rebuilt, not
+    trusted, and no file in the build folder names the first folder."""
     spec, build = _spec(tmp_path), tmp_path / "build"
     first = _robot_copy(tmp_path / "first")
     done = _compile(spec, first, tmp_path / "out1", build)
     assert done.returncode == 0, done.stderr
     shutil.rmtree(first)
-    copies = sorted(build.glob("**/files/*/link1.stl"))
-    assert len(copies) >= 2  # in the converted URDF's entry and in the scaled copy's
-    for copy in copies:  # and the cache cleaned in part: its entries are rebuilt, not trusted
+    copies = sorted(build.glob("**/files/*/link1.stl"))  # in the converted URDF's entry and the scaled copy's
+    for copy in copies:
         copy.unlink()
     second = _robot_copy(tmp_path / "second")
     done = _compile(spec, second, tmp_path / "out2", build)
     assert done.returncode == 0, done.stderr
     assert str(first) not in _build_texts(build)
     assert str(first) not in (tmp_path / "out2" / "arm" / "urdf" / "00000" / "arm.urdf").read_text()
-    assert all(copy.is_file() for copy in copies)
+    assert len(copies) >= 2 and all(copy.is_file() for copy in copies)
 
+
+def test_a_mesh_edited_under_an_unchanged_urdf_reaches_the_next_compile(tmp_path):
+    """The robot compiled, then copied (a branch, a colleague's checkout) and a mesh replaced in
+    the copy under its unchanged URDF: compiled from the copy, the MJCF and URDF (of the robot
+    and of its scaled copy) carry the new mesh, from new cache entries; the first folder's
+    entries stay as they were."""
+    spec, build, first = _spec(tmp_path), tmp_path / "build", _robot_copy(tmp_path / "first")
+    done = _compile(spec, first, tmp_path / "out1", build)
+    assert done.returncode == 0, done.stderr
+    second = _robot_copy(tmp_path / "second")
     mesh = second / "xarm" / "xarm_description" / "meshes" / "xarm6" / "visual" / "link1.stl"
     new = (mesh.parent / "link2.stl").read_bytes()
     assert new != mesh.read_bytes()
     entries = set(build.glob("assets/xarm6_robot-*"))
     mesh.write_bytes(new)
-    done = _compile(spec, second, tmp_path / "out3", build)
+    done = _compile(spec, second, tmp_path / "out2", build)
     assert done.returncode == 0, done.stderr
     for target, name in (("mjcf", "00000.xml"), ("urdf", "00000/arm.urdf"), ("urdf", "00000/big.urdf")):
-        out = tmp_path / "out3" / "arm" / target / name
+        out = tmp_path / "out2" / "arm" / target / name
         paths = [p for p in _mesh_paths(out.read_text()) if p.endswith("/link1.stl")]
         assert paths, f"{name} names no link1.stl"
         assert all((out.parent / p).read_bytes() == new for p in paths), f"{name} names the old link1.stl"
