@@ -15,7 +15,7 @@ from typing import Sequence
 
 from prsc.assets.articulated import RobotModel
 from prsc.files import atomic_copy, atomic_write, is_temporary_name
-from prsc.errors import PrscError
+from prsc.errors import PrscError, read_error
 from prsc.user_assets.mesh_paths import load_mesh, obj_text
 
 
@@ -47,7 +47,7 @@ def _folder_key(folder: str) -> str:
     try:
         entries = _files(folder)
     except OSError as error:  # an input: named as one, never as the output being written
-        raise PrscError(f"cannot read {folder}: {os.strerror(error.errno) if error.errno else error}") from None
+        raise read_error(error, folder) from None
     for entry in entries:
         digest.update(entry.name.encode() + b"\0")
         digest.update(hashlib.sha256(read_input(entry.path)).digest())

@@ -130,9 +130,9 @@ def atomic_copy(source: Path | str, target: Path | str) -> None:
         size = source.stat().st_size
         data = None if target.is_file() and target.stat().st_size == size else source.read_bytes()
     except OSError as error:  # the source is an input: named as one, never as the output
-        from prsc.errors import PrscError
+        from prsc.errors import read_error
 
-        raise PrscError(f"cannot read {source}: {os.strerror(error.errno) if error.errno else error}") from None
+        raise read_error(error, source) from None
     if data is None:
         return
     target.parent.mkdir(parents=True, exist_ok=True)

@@ -23,7 +23,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
-from prsc.errors import PrscError
+from prsc.errors import read_error
 from prsc.files import atomic_write
 from prsc.user_assets.mesh_paths import obj_material_files
 from prsc.user_assets.urdf_source import mesh_file, parse_urdf
@@ -44,7 +44,7 @@ def read_input(path: Path | str) -> bytes:
     try:
         return Path(path).read_bytes()
     except OSError as error:
-        raise PrscError(f"cannot read {path}: {os.strerror(error.errno) if error.errno else error}") from None
+        raise read_error(error, path) from None
 
 
 def asset_inputs(path: Path | str, folders: Sequence[str] = ()) -> tuple[Path, ...]:
@@ -54,7 +54,7 @@ def asset_inputs(path: Path | str, folders: Sequence[str] = ()) -> tuple[Path, .
     try:
         stat = os.stat(path)
     except OSError as error:
-        raise PrscError(f"cannot read {path}: {error.strerror}") from None
+        raise read_error(error, path) from None
     return _inputs(str(path), stat.st_mtime_ns, stat.st_size, tuple(folders))
 
 
@@ -113,7 +113,7 @@ def input_stats(path: Path | str, folders: Sequence[str] = ()) -> tuple[tuple[st
         except FileNotFoundError:
             stats.append((str(file), -1, -1))
         except OSError as error:
-            raise PrscError(f"cannot read {file}: {error.strerror}") from None
+            raise read_error(error, file) from None
     return tuple(stats)
 
 
