@@ -18,7 +18,6 @@ from typing import Sequence
 from prsc.assets.urdf_tree import RobotTree, read_urdf
 from prsc.user_assets.asset_files import ArticulatedAsset, AssetJoint, asset_spec, describe_asset, names_asset_file, resolve_asset_file
 from prsc.errors import PrscError
-from prsc.files import atomic_write
 
 GRAVITY_COMPENSATION_DAMPING = 2.0
 """Joint damping (N m s/rad or N s/m) given to an asset without actuators of its own."""
@@ -139,7 +138,8 @@ class RobotModel:
 
     @property
     def urdf(self) -> Path:
-        """A URDF of the asset with absolute mesh paths (built once, cached by content)."""
+        """A URDF of the asset, its mesh paths relative to its folder (built once, cached by
+        the content of every file it reads: prsc/user_assets/asset_cache.py)."""
         return _urdf_path(self)
 
 
@@ -177,7 +177,7 @@ def robot_model(model: str | None, folders: Sequence[str] = (), passive: bool = 
     return _panda() if is_robot(model) == "panda" else None
 
 
-CONVERSION_VERSION = "4"  # 4: OBJ files of several objects read whole by MuJoCo
+CONVERSION_VERSION = "5"  # 5: keyed by every file the asset reads, its meshes copied into its folder
 """Bump when the URDF written for a file asset changes: its build folder's name carries it."""
 
 
@@ -193,18 +193,22 @@ def _urdf_path(model: RobotModel) -> Path:
         from prsc.assets.panda import panda_urdf_path
 
         return panda_urdf_path()
+    import xml.etree.ElementTree as ET
+
+    from prsc.user_assets.asset_cache import bundle_urdf, entry_usable, write_entry
+
     target = _build_folder(model) / f"{Path(model.source).stem}.urdf"
-    if not target.is_file():
-        target.parent.mkdir(parents=True, exist_ok=True)
+    if not entry_usable(target):
         if Path(model.source).suffix.lower() == ".urdf":
             from prsc.user_assets.asset_files import urdf_with_absolute_paths
 
-            text = urdf_with_absolute_paths(Path(model.source), model.folders)
+            root = bundle_urdf(ET.fromstring(urdf_with_absolute_paths(Path(model.source), model.folders)), target.parent)
         else:
             from prsc.assets.mjcf_urdf import mjcf_as_urdf
 
-            text = mjcf_as_urdf(model.mjcf_spec(), target.parent)
-        atomic_write(target, text)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            root = ET.fromstring(mjcf_as_urdf(model.mjcf_spec(), target.parent))
+        write_entry(target, root)
     return target
 
 

@@ -91,7 +91,7 @@ def _geometry_elements(model, g: int, folder: Path) -> list[tuple[ET.Element, np
             return [(geometry, position, rotation), *caps]
     elif kind == int(mujoco.mjtGeom.mjGEOM_MESH):
         path = _mesh_file(model, int(model.geom_dataid[g]), folder)
-        ET.SubElement(geometry, "mesh", filename=str(path))
+        ET.SubElement(geometry, "mesh", filename=path.relative_to(folder).as_posix())  # beside the URDF
     else:
         raise PrscError(f"geom {model.geom(g).name or g} has a type URDF cannot hold (height field or SDF)")
     return [(geometry, position, rotation)]

@@ -15,7 +15,7 @@ from typing import Sequence
 
 from prsc.assets.articulated import RobotModel
 from prsc.files import atomic_copy, atomic_write, is_temporary_name
-from prsc.errors import PrscError
+from prsc.errors import PrscError, read_error
 from prsc.user_assets.mesh_paths import load_mesh, obj_text
 
 
@@ -41,10 +41,16 @@ def _folder_key(folder: str) -> str:
     give a process that hashed the Panda's meshes while another was writing them a key of its
     own for the whole session (the key is cached), so its scenes would name other mesh folders
     than a fresh process's (the likely cause of one CI failure in test_ray, 2026-11-26)."""
+    from prsc.user_assets.asset_cache import read_input
+
     digest = hashlib.sha256()
-    for entry in _files(folder):
+    try:
+        entries = _files(folder)
+    except OSError as error:  # an input: named as one, never as the output being written
+        raise read_error(error, folder) from None
+    for entry in entries:
         digest.update(entry.name.encode() + b"\0")
-        digest.update(hashlib.sha256(Path(entry.path).read_bytes()).digest())
+        digest.update(hashlib.sha256(read_input(entry.path)).digest())
     return f"{Path(folder).name}-{digest.hexdigest()[:10]}"
 
 
@@ -62,6 +68,8 @@ class AssetStore:
 
         The whole folder is copied, so an OBJ keeps its material and texture files.
         """
+        if not os.path.isfile(source):
+            raise PrscError(f"cannot read {source}: {'not a file' if os.path.exists(source) else 'No such file'}")
         folder = os.path.dirname(os.path.abspath(source))
         target = self.root / robot / _folder_key(folder)
         marker = target / ".complete"

@@ -107,7 +107,8 @@ def _robot_body_text(robot: RobotModel, store_root: str, store_from_bundle: str)
     store = AssetStore(store_root)
     root = ET.parse(robot.urdf).getroot()
     for mesh in root.iter("mesh"):
-        inside = relative_path(store.robot_file(robot.key, mesh.get("filename")), store.root)
+        source = robot.urdf.parent / mesh.get("filename")  # relative to the URDF (or absolute: the Panda's)
+        inside = relative_path(store.robot_file(robot.key, source), store.root)
         mesh.set("filename", f"{store_from_bundle}/{inside}")
     return ("\n".join(element_text(child) for child in root),)
 

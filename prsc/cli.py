@@ -161,6 +161,13 @@ def main(argv: list[str] | None = None) -> int:
         _discard_stdout()
         return 141
     except Exception as error:  # a bug in prsc, not in the user's input
+        if isinstance(error, OSError):  # but a build folder prsc cannot write is the user's to mend
+            from prsc.user_assets.asset_files import build_folder_error
+
+            known = build_folder_error(error)
+            if known is not None:
+                sys.stderr.write(format_error(known))
+                return 2
         if os.environ.get("PRSC_DEBUG"):
             raise
         sys.stderr.write(

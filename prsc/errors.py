@@ -41,6 +41,12 @@ _CHUNK_BYTES = 1024 * 1024
 _SCAN_BYTES = 64 * 1024 * 1024
 
 
+def read_error(error: OSError, path: object) -> PrscError:
+    """`cannot read PATH: reason` for an input prsc could not read: named as the input it is,
+    never as the output being written when it was found missing."""
+    return PrscError(f"cannot read {path}: {os.strerror(error.errno) if error.errno else error}")
+
+
 def _source_line(path: str, line: int) -> str | None:
     """The text of one line of a file (its first MiB), or None when it cannot be read as text."""
     try:

@@ -123,12 +123,20 @@ def atomic_write_tree(folder: Path | str, files: Mapping[str, bytes | str]) -> N
 
 
 def atomic_copy(source: Path | str, target: Path | str) -> None:
-    """Copy a file atomically (skipped when the target already exists with the same size)."""
+    """Copy a file atomically (skipped when the target already exists with the same size); a
+    source that cannot be read is `cannot read SOURCE` (a PrscError)."""
     source, target = Path(source), Path(target)
-    if target.is_file() and target.stat().st_size == source.stat().st_size:
+    try:
+        size = source.stat().st_size
+        data = None if target.is_file() and target.stat().st_size == size else source.read_bytes()
+    except OSError as error:  # the source is an input: named as one, never as the output
+        from prsc.errors import read_error
+
+        raise read_error(error, source) from None
+    if data is None:
         return
     target.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write(target, source.read_bytes())
+    atomic_write(target, data)
 
 
 def is_temporary_name(name: str, of: str | None = None) -> bool:

@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
 
-from prsc.pipeline.executors import Executor, LocalExecutor, add_executor_arguments, make_executor, worker_count
+from prsc.pipeline.executors import Executor, LocalExecutor, add_executor_arguments, executor_from_arguments, worker_count
 from prsc.pipeline.output_folder import (
     CHECKPOINT_SECONDS, DEFAULT_WIDTH, JOURNAL, MANIFEST, MANIFEST_FORMAT, Listed, close_manifest, load_manifest,
     lock_folder, output_root, prepare_root, remove_listed, write_manifest,
@@ -353,7 +353,7 @@ def run(args: argparse.Namespace) -> int:
     """Entry point of `prsc compile`."""
     targets = list(dict.fromkeys(t.strip() for t in str(args.target).split(",") if t.strip()))
     jobs = worker_count(args.jobs)
-    executor = make_executor(args.executor, jobs, args.address, start="fork")
+    executor = executor_from_arguments(args, jobs, start="fork")
     settle_targets(targets, args.settle_check)
     root = compile_scenes(args.file, targets, args.scenes, args.seed, args.output, jobs=jobs, include_dirs=args.include,
                           executor=executor, force=args.force, meshes_anywhere=args.meshes_anywhere,

@@ -119,7 +119,8 @@ def run(args: argparse.Namespace) -> int:
     from prsc.runner.worker import WorkerConfig
     from prsc.pipeline.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
     from prsc.commands.compile import compile_scenes
-    from prsc.pipeline.executors import make_executor, worker_count
+    from prsc.pipeline.executors import executor_from_arguments, worker_count
+    from prsc.pipeline.output_folder import folder_before, restore_folder
     from prsc.commands.falsify_report import write_report
     from prsc.files import atomic_write
     from prsc.sampling import compile_sampler
@@ -132,12 +133,13 @@ def run(args: argparse.Namespace) -> int:
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)
     jobs = worker_count(args.jobs)
-    executor = make_executor(args.executor, jobs, args.address, start="spawn")
+    executor = executor_from_arguments(args, jobs, start="spawn")
     out = args.output or Path("out") / f"falsify-{source.stem}"
     refuse_foreign_results(out, "falsify", args.force)
     results = Results(out, {"command": "falsify", "spec": str(source), "seed": args.seed, "method": args.method,
                             "budget": args.budget, "rounds": args.rounds, "controller": args.controller,
                             "controller_sha256": controller_ref.digest, "max_sim_seconds": args.max_sim_seconds})
+    before = folder_before(out)  # put back if the campaign fails before its first episode
     kept: dict[int, dict] = {}
     if args.resume:
         if results.stored_key() is None:
@@ -174,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
                 atomic_write(listing, "".join(json.dumps(s, separators=(",", ":")) + "\n" for s in scenes))
                 root = compile_scenes(str(listing), ["json", "mjcf"], None, args.seed, str(out), jobs=jobs,
                                       include_dirs=args.include,
-                                      executor=make_executor(args.executor, jobs, args.address, start="fork"),
+                                      executor=executor_from_arguments(args, jobs, start="fork"),
                                       force=args.force, assets_dir=str(out / "assets"))
                 tasks, _ = episode_tasks(root, None, args.seed, controller_ref, args.max_sim_seconds, first=start)
                 extra = {start + k: {"round": number, "weight": e["weight"], "law": proposal.law, "features": e["features"],
@@ -185,6 +187,11 @@ def run(args: argparse.Namespace) -> int:
                 console.print(f"round {number}: {size} episodes, {failed} failed")
             start += size
             proposal = next_proposal(args.method, proposal, masses, [results.records[k] for k in range(start)])
+    except Exception:
+        results.close()
+        if not results.records:
+            restore_folder(before)  # failed before its first episode: the folder as it was
+        raise
     finally:
         results.close()
     records = results.finish()

@@ -159,7 +159,8 @@ def run(args: argparse.Namespace) -> int:
     from prsc.runner.controller import declared_outcomes, load_controller, parse_target
     from prsc.runner.worker import WorkerConfig
     from prsc.commands.compile import MANIFEST, compile_scenes
-    from prsc.pipeline.executors import make_executor, worker_count
+    from prsc.pipeline.executors import executor_from_arguments, worker_count
+    from prsc.pipeline.output_folder import folder_before, restore_folder
     from prsc.pipeline.progress import progress_bar
     from prsc.pipeline.scene_sources import proposal_from_json
     from prsc.pipeline.static_checks import compile_checked
@@ -170,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
     controller = load_controller(controller_ref)
     declared = declared_outcomes(controller)
     jobs = worker_count(args.jobs)
-    executor = make_executor(args.executor, jobs, args.address, start="spawn")
+    executor = executor_from_arguments(args, jobs, start="spawn")
     is_json = source.suffix in (".json", ".jsonl")
     # The spec is compiled once, here: the scenes checked below and those written are its.
     compiled = None if is_json else compile_checked(str(source), args.include, law=args.law,
@@ -183,52 +184,61 @@ def run(args: argparse.Namespace) -> int:
     out = args.output or Path("out") / f"run-{source.stem}"
     refuse_foreign_results(out, "run", args.force)
     started = time.perf_counter()
-    # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
-    count = args.n if args.n is not None else (0 if is_json else 10)
-    root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs=jobs, include_dirs=args.include,
-                          executor=make_executor(args.executor, jobs, args.address, start="fork"), force=args.force,
-                          proposal=proposal, law=args.law, compiled=compiled)
-    manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
-    tasks, scenes = episode_tasks(root, range(count) if count else None, args.seed, controller_ref, args.max_sim_seconds)
-    if check is not None and not is_json:  # a JSON input's scenes, and scene 0 of a spec, were checked above
-        for scene in scenes[1:]:
-            check(scene)
-    compiled = time.perf_counter()
-
-    key = _campaign_key(manifest, args, controller_ref.digest)
-    dataset = _open_dataset(args, key, tasks, scenes) if args.record is not None else None
-    results = Results(out, key)
-    # with --record, an episode is done once the dataset holds it (or left it out by --keep)
-    done = len(tasks) if dataset is None else min(len(tasks), dataset.processed)
-    kept = {k: r for k, r in results.recorded().items() if k < done}
-    todo = [t for t in tasks if t.index not in kept]
-    results.begin(kept)
-    if kept:
-        console.print(f"resuming: {len(kept)} of {len(tasks)} episodes already in {out / RESULTS}")
-    record_settings = None
-    if dataset is not None:
-        from prsc.runner.episode_records import RecordSettings
-
-        record_settings = RecordSettings(args.format, args.fps, lossless=args.lossless, images=args.images)
-    progress = progress_bar(len(todo), "episodes", "episodes")
+    before = folder_before(out)  # put back if the campaign fails before its first episode
+    results: Results | None = None
+    dataset = None
     try:
-        with progress if progress else nullcontext():
-            bar = progress.add_task("episodes", total=len(todo)) if progress else None
+        # Scenes and MJCF files as `prsc compile --target json,mjcf` writes them, under out/<stem>/.
+        count = args.n if args.n is not None else (0 if is_json else 10)
+        root = compile_scenes(str(source), ["json", "mjcf"], count, args.seed, str(out), jobs=jobs,
+                              include_dirs=args.include, executor=executor_from_arguments(args, jobs, start="fork"),
+                              force=args.force, proposal=proposal, law=args.law, compiled=compiled)
+        manifest = json.loads((root / MANIFEST).read_text(encoding="utf-8"))
+        tasks, scenes = episode_tasks(root, range(count) if count else None, args.seed, controller_ref,
+                                      args.max_sim_seconds)
+        if check is not None and not is_json:  # a JSON input's scenes, and scene 0 of a spec, were checked above
+            for scene in scenes[1:]:
+                check(scene)
+        compiled = time.perf_counter()
 
-            def finished(record: dict) -> None:
-                results.add(record)
-                if progress:
-                    progress.advance(bar)
-
-            cpu_before = cpu_seconds()
-            run_episodes(executor, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray",
-                                                record=record_settings),
-                         todo, finished, on_recording=None if dataset is None else lambda k, e: dataset.add(e, k))
-            cpu_used = cpu_seconds() - cpu_before
-    finally:
-        results.close()
+        key = _campaign_key(manifest, args, controller_ref.digest)
+        dataset = _open_dataset(args, key, tasks, scenes) if args.record is not None else None
+        results = Results(out, key)
+        # with --record, an episode is done once the dataset holds it (or left it out by --keep)
+        done = len(tasks) if dataset is None else min(len(tasks), dataset.processed)
+        kept = {k: r for k, r in results.recorded().items() if k < done}
+        todo = [t for t in tasks if t.index not in kept]
+        results.begin(kept)
+        if kept:
+            console.print(f"resuming: {len(kept)} of {len(tasks)} episodes already in {out / RESULTS}")
+        record_settings = None
         if dataset is not None:
-            dataset.close()
+            from prsc.runner.episode_records import RecordSettings
+
+            record_settings = RecordSettings(args.format, args.fps, lossless=args.lossless, images=args.images)
+        progress = progress_bar(len(todo), "episodes", "episodes")
+        try:
+            with progress if progress else nullcontext():
+                bar = progress.add_task("episodes", total=len(todo)) if progress else None
+
+                def finished(record: dict) -> None:
+                    results.add(record)
+                    if progress:
+                        progress.advance(bar)
+
+                cpu_before = cpu_seconds()
+                run_episodes(executor, WorkerConfig(gl_backend, one_raster_thread=jobs > 1 or args.executor == "ray",
+                                                    record=record_settings),
+                             todo, finished, on_recording=None if dataset is None else lambda k, e: dataset.add(e, k))
+                cpu_used = cpu_seconds() - cpu_before
+        finally:
+            results.close()
+            if dataset is not None:
+                dataset.close()
+    except Exception:
+        if results is None or not results.records:
+            restore_folder(before)  # failed before its first episode: the folder as it was
+        raise
     finished_at = time.perf_counter()
     ordered = results.finish()  # index order, as a clean run writes
 
@@ -251,7 +261,7 @@ def run(args: argparse.Namespace) -> int:
     episodes = f"{len(todo)} episodes {finished_at - compiled:.1f} s"
     if todo and args.executor == "local":
         episodes += f", {cpu_used / len(todo):.2f} CPU s each"
-    console.print(f"compile {compiled - started:.1f} s, {episodes} ({jobs} job(s), {args.executor}); "
+    console.print(f"compile {compiled - started:.1f} s, {episodes} ({executor.summary()}); "
                   f"results in {out / RESULTS}")
     if dataset is not None:
         frames = sum(e["frames"] for e in dataset.episodes)

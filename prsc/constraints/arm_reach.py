@@ -226,10 +226,23 @@ def compute_reach(asset: ArticulatedAsset) -> ArmReach:
 
 
 def reach_cache(asset: ArticulatedAsset) -> Path:
-    """Where an arm's reach is cached: keyed by its file's content, its tool frame and this recipe."""
+    """Where an arm's reach is cached: keyed by the content of every file it reads, its tool
+    frame and this recipe."""
     tool = str(asset.tcp)
     tag = re.sub(r"[^A-Za-z0-9_.-]", "_", tool)[:40] + "-" + hashlib.sha256(tool.encode()).hexdigest()[:6]
     return build_root() / "reach" / f"{asset.key}-{tag}-v{RECIPE_VERSION}.json"
+
+
+def _cached_reach(path: Path, asset: ArticulatedAsset) -> ArmReach | None:
+    """The reach a cache file holds, or None when it is missing or cannot be used (unreadable,
+    cut short, of other files): such a file is computed again, not trusted."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if data.get("sha256") != asset.digest:
+            return None
+        return ArmReach(ring_from_json(data), tuple(tuple(r) for r in data["rays"]))
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return None
 
 
 @lru_cache(maxsize=16)
@@ -237,9 +250,9 @@ def arm_reach(asset: ArticulatedAsset) -> ArmReach:
     """The arm's reach, computed on first use and read from the cache after (once per process:
     every scene whose robot moves asks for it three times per `reachable by`)."""
     path = reach_cache(asset)
-    if path.is_file():
-        data = json.loads(path.read_text(encoding="utf-8"))
-        return ArmReach(ring_from_json(data), tuple(tuple(r) for r in data["rays"]))
+    cached = _cached_reach(path, asset)
+    if cached is not None:
+        return cached
     reach = compute_reach(asset)
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(path, json.dumps({

@@ -75,17 +75,25 @@ class Results:
         return done
 
     def begin(self, kept: dict[int, dict]) -> None:
-        """Start (or continue) the campaign with the `kept` episodes, in index order."""
+        """Start (or continue) the campaign with the `kept` episodes, in index order. A campaign
+        with none writes its files with its first episode: one that fails before leaves none."""
+        self.records = dict(kept)
+        if kept:
+            self._open()
+
+    def _open(self) -> None:
+        """Write campaign.json and the recorded episodes, and open the results file to append."""
         from prsc.files import atomic_write
 
         self.out.mkdir(parents=True, exist_ok=True)
-        self.records = dict(kept)
         atomic_write(self.out / CAMPAIGN, json.dumps(self.key, indent=1) + "\n")
         atomic_write(self.path, "".join(_line(self.records[k]) + "\n" for k in sorted(self.records)))
         self._file = open(self.path, "a", encoding="utf-8")
 
     def add(self, record: dict) -> None:
         """Append one finished episode at once (flushed)."""
+        if self._file is None:
+            self._open()
         self.records[int(record["index"])] = record
         try:
             self._file.write(_line(record) + "\n")
@@ -101,6 +109,8 @@ class Results:
 
         self.close()
         ordered = [self.records[k] for k in sorted(self.records)]
+        self.out.mkdir(parents=True, exist_ok=True)
+        atomic_write(self.out / CAMPAIGN, json.dumps(self.key, indent=1) + "\n")
         atomic_write(self.path, "".join(_line(r) + "\n" for r in ordered))
         return ordered
 

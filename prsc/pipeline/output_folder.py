@@ -257,3 +257,51 @@ class Listed:
 
     def __call__(self, index: int, target: str) -> bool:
         return target in self.entries.get(index, {})
+
+
+@dataclass(frozen=True)
+class FolderBefore:
+    """What a campaign's folder held before the campaign started: put back when it fails before
+    its first episode (prsc run, prsc falsify), so such a failure leaves nothing of its own."""
+
+    folder: Path
+    existed: bool
+    paths: frozenset[str]  # files and folders inside, relative
+    manifests: tuple[tuple[str, bytes], ...]  # the manifests a compile rewrites, as they were
+
+
+def folder_before(folder: Path) -> FolderBefore:
+    """The folder's paths (and its manifests' bytes) now."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        return FolderBefore(folder, False, frozenset(), ())
+    paths = frozenset(str(p.relative_to(folder)) for p in folder.rglob("*"))
+    manifests = tuple((rel, (folder / rel).read_bytes()) for rel in sorted(paths)
+                      if Path(rel).name == MANIFEST and (folder / rel).is_file())
+    return FolderBefore(folder, True, paths, manifests)
+
+
+def restore_folder(before: FolderBefore) -> None:
+    """Remove every path the campaign added to its folder (the folder itself, if it made it) and
+    put back the manifests it rewrote. Best effort: a path that cannot go stays."""
+    from prsc.files import atomic_write
+
+    folder = before.folder
+    if not before.existed:
+        shutil.rmtree(folder, ignore_errors=True)
+        return
+    added = sorted((p for p in folder.rglob("*") if str(p.relative_to(folder)) not in before.paths),
+                   key=lambda p: len(p.parts))
+    for path in added:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:
+                pass
+    for rel, data in before.manifests:
+        try:
+            atomic_write(folder / rel, data)
+        except OSError:
+            pass

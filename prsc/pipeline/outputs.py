@@ -10,7 +10,13 @@ from prsc.errors import PrscError
 
 
 def write_error(error: OSError, path: Path | str | None = None) -> PrscError:
-    """`cannot write PATH: reason` for an OSError met while writing output."""
+    """`cannot write PATH: reason` for an OSError met while writing output (or writing the build
+    folder's caches on the way: then that folder is named)."""
+    from prsc.user_assets.asset_files import build_folder_error
+
+    in_build = build_folder_error(error)
+    if in_build is not None:
+        return in_build
     where = path or error.filename or "output"
     reason = os.strerror(error.errno) if error.errno else str(error)
     if error.errno == errno.ENOSPC:

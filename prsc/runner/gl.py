@@ -15,6 +15,8 @@ import sys
 from prsc.runner.faults import InfrastructureError
 
 HEADLESS_BACKENDS = ("egl", "osmesa")
+GL_VARIABLES = ("MUJOCO_GL", "PYOPENGL_PLATFORM")
+"""What `choose_gl_backend` sets: every worker process of a campaign starts with the driver's."""
 
 _context = None  # this process's GL context, made on first use
 

@@ -14,7 +14,6 @@ Foundation module: imported by every layer, it imports mujoco only inside functi
 
 from __future__ import annotations
 
-import hashlib
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -23,6 +22,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Sequence
 
+from prsc.user_assets.asset_cache import input_stats, inputs_digest
 from prsc.user_assets.asset_inertia import unbalanced
 from prsc.errors import PrscError
 from prsc.user_assets.mesh_paths import mujoco_readable_meshes
@@ -42,6 +42,17 @@ def build_root() -> Path:
     """prsc's build folder for converted assets and caches: `$PRSC_BUILD_DIR`, default `<repo>/build`."""
     root = os.environ.get("PRSC_BUILD_DIR")
     return Path(root) if root else Path(__file__).resolve().parents[2] / "build"
+
+
+def build_folder_error(error: OSError) -> PrscError | None:
+    """`cannot write the build folder ROOT: ...` for an OSError met writing under it (a read-only
+    or full build folder), else None: the build folder is prsc's cache, not the user's output."""
+    root = build_root()
+    if not error.filename or not os.path.abspath(os.fspath(error.filename)).startswith(str(root.absolute()) + os.sep):
+        return None
+    reason = os.strerror(error.errno) if error.errno else str(error)
+    return PrscError(f"cannot write the build folder {root}: {error.filename}: {reason}; "
+                     "point PRSC_BUILD_DIR at a writable folder")
 
 
 def _converted_meshes() -> Path:
@@ -74,7 +85,7 @@ class ArticulatedAsset:
     """A URDF or MJCF asset as every stage sees it (lengths in m, angles in rad)."""
 
     source: str  # absolute path of the file
-    digest: str  # sha256 of the file's bytes: the cache key of everything built from it
+    digest: str  # sha256 of every file it reads (asset_cache.inputs_digest): the key of everything built from it
     format: str  # "urdf" or "mjcf"
     name: str  # the file's model name
     root: str  # the root body (link)
@@ -206,22 +217,14 @@ def asset_spec(path: Path | str, folders: Sequence[str] = ()):
     return spec
 
 
-def _digest(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
 def describe_asset(path: Path | str, folders: Sequence[str] = ()) -> ArticulatedAsset:
-    """The description of an asset file (cached while the file is unchanged)."""
+    """The description of an asset file (cached while it and every file it reads are unchanged)."""
     path = Path(path).resolve()
-    try:
-        stat = os.stat(path)
-    except OSError as error:
-        raise PrscError(f"cannot read {path}: {error.strerror}") from None
-    return _describe(str(path), stat.st_mtime_ns, stat.st_size, tuple(folders))
+    return _describe(str(path), tuple(folders), input_stats(path, folders))
 
 
 @lru_cache(maxsize=64)
-def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -> ArticulatedAsset:
+def _describe(source: str, folders: tuple[str, ...], inputs: tuple[tuple[str, int, int], ...]) -> ArticulatedAsset:
     path = Path(source)
     spec = asset_spec(path, folders)
     try:
@@ -250,7 +253,7 @@ def _describe(source: str, mtime_ns: int, size: int, folders: tuple[str, ...]) -
     links = tuple(model.body(b).name for b in range(1, model.nbody))
     sites = tuple(model.site(s).name for s in range(model.nsite))
     return ArticulatedAsset(
-        source=source, digest=_digest(path), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
+        source=source, digest=inputs_digest(path, folders), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
         name=spec.modelname or path.stem, root=model.body(root).name, links=links, joints=tuple(joints),
         actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
         tcp=_tool_frame(model, sites), box_low=low, box_high=high,

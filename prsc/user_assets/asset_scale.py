@@ -1,7 +1,8 @@
 """`scale` on an asset from a file (docs/assets.md, "Size"; LANGUAGE §7): the whole tree made
 `scale` times larger about its root, written once as a copy of the file in the build folder
-(`$PRSC_BUILD_DIR/scaled/<stem>-<hash>-x<scale>.<suffix>`, keyed by the file's content, the
-scale and SCALE_VERSION). The IR names the copy as the object's model, so every later stage,
+(`$PRSC_BUILD_DIR/scaled/<stem>-<hash>-x<scale>/<stem>.<suffix>`, keyed by the content of
+every file it reads, the scale and SCALE_VERSION, with copies of its meshes beside it:
+prsc/user_assets/asset_cache.py). The IR names the copy as the object's model, so every later stage,
 every backend and `reachable by` read one file, as they do for an unscaled asset.
 
 What scales, by s: every position (joint, link, geom, site and inertial origins), every
@@ -19,11 +20,11 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Sequence
 
+from prsc.user_assets.asset_cache import bundle_mjcf, bundle_urdf, entry_usable, inputs_digest, write_entry
 from prsc.user_assets.asset_files import asset_spec, build_root, urdf_with_absolute_paths
 from prsc.user_assets.urdf_source import parse_urdf
-from prsc.files import atomic_write
 
-SCALE_VERSION = "1"
+SCALE_VERSION = "2"  # 2: a folder per copy, its meshes copied in
 
 
 def _times(text: str | None, factor: float) -> str:
@@ -44,8 +45,8 @@ def _massless_links(path: Path) -> set[str]:
     return names
 
 
-def _scaled_urdf(text: str, s: float, massless: set[str]) -> str:
-    """A URDF's text with every length times s, masses times s^3 and inertias times s^5; the
+def _scaled_urdf(text: str, s: float, massless: set[str]) -> ET.Element:
+    """A URDF (its text) with every length times s, masses times s^3 and inertias times s^5; the
     `massless` links keep the mass 0 they declare (the copy says what the file says)."""
     root = ET.fromstring(text)
     for origin in root.iter("origin"):
@@ -74,11 +75,11 @@ def _scaled_urdf(text: str, s: float, massless: set[str]) -> str:
                 for key in ("lower", "upper"):
                     if limit.get(key) is not None:
                         limit.set(key, _times(limit.get(key), s))
-    return '<?xml version="1.0"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+    return root
 
 
-def _scaled_mjcf(path: Path, s: float, folders: Sequence[str]) -> str:
-    """An MJCF's text (asset paths absolute) with every length times s, masses s^3, inertias s^5."""
+def _scaled_mjcf(path: Path, s: float, folders: Sequence[str]) -> ET.Element:
+    """An MJCF (asset paths absolute) with every length times s, masses s^3, inertias s^5."""
     import mujoco
     import numpy as np
 
@@ -125,21 +126,19 @@ def _scaled_mjcf(path: Path, s: float, folders: Sequence[str]) -> str:
         size.attrib.pop("nkey", None)
         if not size.attrib and not len(size):
             root.remove(size)
-    return ET.tostring(root, encoding="unicode") + "\n"
+    return root
 
 
 def scaled_asset_file(path: Path, scale: float, folders: Sequence[str] = ()) -> Path:
     """The asset file `path` made `scale` times larger (a copy in the build folder, written once); `path` at scale 1."""
     if scale == 1.0:
         return path
-    digest = hashlib.sha256(path.read_bytes())
-    digest.update(f"{SCALE_VERSION} {scale!r}".encode())
-    target = build_root() / "scaled" / f"{path.stem}-{digest.hexdigest()[:10]}-x{scale:g}{path.suffix}"
-    if not target.is_file():
-        target.parent.mkdir(parents=True, exist_ok=True)
+    digest = hashlib.sha256(f"{inputs_digest(path, folders)} {SCALE_VERSION} {scale!r}".encode())
+    target = build_root() / "scaled" / f"{path.stem}-{digest.hexdigest()[:10]}-x{scale:g}" / path.name
+    if not entry_usable(target):
         if path.suffix.lower() == ".urdf":
-            text = _scaled_urdf(urdf_with_absolute_paths(path, folders), scale, _massless_links(path))
+            root = _scaled_urdf(urdf_with_absolute_paths(path, folders), scale, _massless_links(path))
+            write_entry(target, bundle_urdf(root, target.parent))
         else:
-            text = _scaled_mjcf(path, scale, folders)
-        atomic_write(target, text)
+            write_entry(target, bundle_mjcf(_scaled_mjcf(path, scale, folders), target.parent), header="")
     return target

@@ -121,7 +121,11 @@ def cabinet_urdf(width: float, length: float, height: float, drawers: int) -> Pa
     text = cabinet_text(width, length, height, drawers)
     digest = hashlib.sha256((VERSION + text).encode()).hexdigest()[:12]
     target = build_root() / "assets" / "cabinets" / f"cabinet-{digest}.urdf"
-    if not target.is_file():
+    try:
+        usable = target.read_text(encoding="utf-8") == text
+    except (OSError, UnicodeDecodeError):
+        usable = False
+    if not usable:  # missing, or not what these numbers write: written again, not trusted
         target.parent.mkdir(parents=True, exist_ok=True)
         atomic_write(target, text)
     return target

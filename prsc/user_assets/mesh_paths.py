@@ -109,7 +109,7 @@ def _mesh_extent(path: str, mtime_ns: int, size: int, up_axis: str) -> tuple[flo
     return tuple(float(v) for v in high - low)  # type: ignore[return-value]
 
 
-def _named_images(path: Path) -> list[Path]:
+def obj_material_files(path: Path) -> list[Path]:
     """The material files an OBJ names, then the base-colour images (`map_Kd`) those name."""
     if path.suffix.lower() != ".obj":
         return []
@@ -129,12 +129,12 @@ def _named_images(path: Path) -> list[Path]:
 
 def missing_texture_images(path: Path | str) -> tuple[str, ...]:
     """The texture images an OBJ's material files name that do not exist (trimesh skips them silently)."""
-    return tuple(str(p) for p in _named_images(Path(path)) if not p.is_file())
+    return tuple(str(p) for p in obj_material_files(Path(path)) if not p.is_file())
 
 
 def obj_texture_image(path: Path | str) -> Path | None:
     """The first base-colour image an OBJ's materials name and that exists, or None."""
-    images = [p for p in _named_images(Path(path)) if p.suffix.lower() != ".mtl" and p.is_file()]
+    images = [p for p in obj_material_files(Path(path)) if p.suffix.lower() != ".mtl" and p.is_file()]
     return images[0] if images else None
 
 

@@ -26,6 +26,16 @@ def _package_path(uri: str, urdf: Path, folders: Sequence[str]) -> str:
                     "in its parent folders or in the --include folders")
 
 
+def mesh_file(filename: str, urdf: Path, folders: Sequence[str]) -> str:
+    """The absolute path of the mesh a URDF's `<mesh filename>` names (`package://`, `file://`
+    or relative to the URDF's folder)."""
+    if filename.startswith("package://"):
+        filename = _package_path(filename, urdf, folders)
+    elif filename.startswith("file://"):
+        filename = filename[len("file://"):]
+    return str((urdf.parent / filename).resolve())
+
+
 def _refuse_xacro(root: ET.Element, path: Path) -> None:
     """A URDF that still holds xacro (`$(arg x)`, `${expr}`: husky.urdf's IMU) is refused at the
     first such value, with its line: MuJoCo would only say "bad format in attribute"."""
@@ -69,12 +79,7 @@ def urdf_tree(path: Path, folders: Sequence[str], converted: Path) -> ET.Element
     _refuse_xacro(root, path)
     parents = {child: parent for parent in root.iter() for child in parent}
     for mesh in root.iter("mesh"):
-        filename = mesh.get("filename", "")
-        if filename.startswith("package://"):
-            filename = _package_path(filename, path, folders)
-        elif filename.startswith("file://"):
-            filename = filename[len("file://"):]
-        filename = str((path.parent / filename).resolve())
+        filename = mesh_file(mesh.get("filename", ""), path, folders)
         if not os.path.isfile(filename):
             raise PrscError(f"{path.name}: mesh {mesh.get('filename')!r} not found ({filename})")
         if Path(filename).suffix.lower() not in MUJOCO_MESHES:

@@ -139,3 +139,110 @@ def test_an_unreadable_mesh_is_reported_at_the_object_without_its_contents(tmp_p
     assert err.startswith(f"{spec}:2:34: error: a: cannot read mesh {tmp_path / 'leak.xyz'}: not a mesh file")
     assert "hunter2" not in err
     assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------ the build folder between runs
+# Issue 41: caches of a user's asset (its converted URDF, a scaled copy) moved, deleted or made
+# read-only between runs, each run a fresh process as a user's. Root ignores chmod, so a
+# read-only build folder is a process whose every write under it fails with EROFS.
+
+THING = """<?xml version="1.0"?>
+<robot name="thing">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry><mesh filename="meshes/tet.obj" scale="0.2 0.2 0.2"/></geometry></visual>
+    <collision><geometry><mesh filename="meshes/tet.obj" scale="0.2 0.2 0.2"/></geometry></collision></link>
+  <link name="lid"><inertial><mass value="0.1"/><inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="0 0 0.2"/><geometry><box size="0.1 0.1 0.02"/></geometry></visual></link>
+  <joint name="hinge" type="revolute"><parent link="base"/><child link="lid"/><axis xyz="1 0 0"/>
+    <limit lower="0" upper="1" effort="1" velocity="1"/></joint>
+</robot>
+"""
+THING_SPEC = """class Thing(Object):
+    model: "thing/thing.urdf"
+
+t = Thing at Vector3D(0, 0, 0.5)
+big = Thing at Vector3D(1, 0, 0.5), with scale 1.5
+"""
+READ_ONLY = """
+import errno, os, sys
+build = os.path.realpath(os.environ["PRSC_BUILD_DIR"])
+def refused(path):
+    return os.path.realpath(os.fspath(path)).startswith(build)
+def wrap(call, writes):
+    def wrapped(path, *args, **kwargs):
+        if writes(args, kwargs) and refused(path):
+            raise OSError(errno.EROFS, os.strerror(errno.EROFS), os.fspath(path))
+        return call(path, *args, **kwargs)
+    return wrapped
+os.open = wrap(os.open, lambda a, k: (a[0] if a else k.get("flags", 0)) & (os.O_WRONLY | os.O_RDWR | os.O_CREAT))
+os.mkdir = wrap(os.mkdir, lambda a, k: True)
+os.replace = wrap(os.replace, lambda a, k: True)
+os.rename = wrap(os.rename, lambda a, k: True)
+os.unlink = wrap(os.unlink, lambda a, k: True)
+from prsc.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def _thing_project(folder: Path) -> Path:
+    (folder / "thing" / "meshes").mkdir(parents=True)
+    (folder / "thing" / "thing.urdf").write_text(THING)
+    (folder / "thing" / "meshes" / "tet.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    spec = folder / "things.prs"
+    spec.write_text(THING_SPEC)
+    return spec
+
+
+def _compile_with_build(spec: Path, out: Path, build: Path, read_only: bool = False) -> subprocess.CompletedProcess:
+    command = ["-c", READ_ONLY] if read_only else ["-m", "prsc.cli"]
+    return subprocess.run([sys.executable, *command, "compile", str(spec), "--target", "json,mjcf,urdf", "-o", str(out)],
+                          capture_output=True, text=True, env=dict(os.environ, PRSC_BUILD_DIR=str(build)), timeout=300)
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _written(out: Path) -> dict[str, bytes]:
+    """The simulator files of an output folder (its JSON files name the spec's path, and scene JSON
+    a scaled copy by its place in the build folder)."""
+    return {name: data for name, data in _files(out).items() if not name.endswith(".json")}
+
+
+def test_cached_assets_moved_deleted_and_read_only_between_runs(tmp_path):
+    spec, build = _thing_project(tmp_path / "project"), tmp_path / "build"
+    done = _compile_with_build(spec, tmp_path / "o1", build)
+    assert done.returncode == 0, done.stderr
+    cached = _files(build)
+    assert any(name.endswith(".urdf") for name in cached) and str(tmp_path / "project") not in str(cached.values())
+
+    # The build folder moved: every entry is used as it is (nothing rebuilt, nothing added).
+    moved = tmp_path / "elsewhere" / "build"
+    moved.parent.mkdir()
+    build.rename(moved)
+    done = _compile_with_build(spec, tmp_path / "o2", moved)
+    assert done.returncode == 0, done.stderr
+    assert _files(moved) == cached
+    assert _written(tmp_path / "o2") == _written(tmp_path / "o1")
+
+    # Read-only: a complete cache is read without a write; an empty one is a clear error.
+    done = _compile_with_build(spec, tmp_path / "o3", moved, read_only=True)
+    assert done.returncode == 0, done.stderr
+    assert _written(tmp_path / "o3") == _written(tmp_path / "o1")
+    empty = tmp_path / "empty-build"
+    empty.mkdir()
+    done = _compile_with_build(spec, tmp_path / "o4", empty, read_only=True)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert f"cannot write the build folder {empty}" in done.stderr and "PRSC_BUILD_DIR" in done.stderr, done.stderr
+    assert not (tmp_path / "o4").exists()
+
+    # Files of the cache deleted (every other one): the entries are rebuilt, the output the same.
+    for k, name in enumerate(sorted(cached)):
+        if k % 2 == 0:
+            (moved / name).unlink()
+    # ... and the asset's own folder moved too.
+    (tmp_path / "project").rename(tmp_path / "project2")
+    done = _compile_with_build(tmp_path / "project2" / "things.prs", tmp_path / "o5", moved)
+    assert done.returncode == 0, done.stderr
+    assert _files(moved) == cached
+    assert _written(tmp_path / "o5") == _written(tmp_path / "o1")

@@ -20,7 +20,8 @@ INCLUDE = ["-I", str(REPO / "specs")]
 @pytest.fixture(scope="module")
 def cluster():
     """A two-CPU local Ray cluster for this module's tests, shut down after them."""
-    ray.init(num_cpus=2, include_dashboard=False, object_store_memory=80 * 1024 * 1024,
+    # address "local": its own cluster, never one another test file (test_ray_nodes.py) runs meanwhile
+    ray.init(address="local", num_cpus=2, include_dashboard=False, object_store_memory=80 * 1024 * 1024,
              log_to_driver=False, configure_logging=False)
     yield ray.get_runtime_context().gcs_address
     ray.shutdown()
