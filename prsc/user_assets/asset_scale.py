@@ -19,7 +19,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Sequence
 
-from prsc.user_assets.asset_files import asset_spec, build_root, urdf_with_absolute_paths
+from prsc.user_assets.asset_files import build_root, file_spec, urdf_with_absolute_paths
 from prsc.user_assets.urdf_source import parse_urdf
 from prsc.files import atomic_write
 
@@ -82,7 +82,7 @@ def _scaled_mjcf(path: Path, s: float, folders: Sequence[str]) -> str:
     import mujoco
     import numpy as np
 
-    spec = asset_spec(path, folders)
+    spec = file_spec(path, folders)  # the copy keeps the file's own axes; reading it turns it
     slides = {j.name for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_SLIDE}
     model = spec.compile()  # the keyframes' qpos addresses, before anything moves
     lengths = np.ones(model.nq)
