@@ -123,8 +123,8 @@ def _boundary(reach: TopDownReach, angle: float, height: float, inside: float, o
 
 def panda_ring(rays: dict, angles: list[float]) -> ReachRing:
     """The reach kept over the heights: an outer cell minus a hole and a gap
-    (prsc/constraints/reach_ring.py); the rays' angles turn from +y (ahead here) to the ring's
-    x-ahead convention by +90 deg."""
+    (prsc/constraints/reach_ring.py); the rays' angles (0: ahead, +y) turn to the ring's (0: +x)
+    by +90 deg."""
     per_ray = [[rays[k, j] for k in range(len(HEIGHTS))] for j in range(SECTORS)]
     return ring_from_rays([a + math.pi / 2 for a in angles[:SECTORS]], list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)
 
@@ -356,8 +356,8 @@ def _plot(ring: ReachRing, grid: ReachGrid, path: str, name: str) -> None:
             axes.scatter(grid.points[mask, 0], grid.points[mask, 1], s=4, color=colour, label=label)
     axes.plot([0], [0], "k+", label="base")
     axes.set_aspect("equal")
-    axes.set_xlabel("x (m, ahead)")
-    axes.set_ylabel("y (m)")
+    axes.set_xlabel("x (m, right)")
+    axes.set_ylabel("y (m, ahead)")
     axes.set_title(f"{name}: top-down reach at the root's height\n(the ring `reachable by` keeps, against the IK)",
                    fontsize=10)
     axes.legend(loc="lower left", fontsize=8)
