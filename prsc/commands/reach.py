@@ -55,9 +55,8 @@ class TopDownReach:
 
     def __init__(self) -> None:
         from prsc.assets import panda
-        from prsc.runner.ik import ArmIK
-
         from prsc.runner.grasping import APPROACH_HEIGHT, LIFT_HEIGHT
+        from prsc.runner.ik import ArmIK
 
         self.approach, self.lift = APPROACH_HEIGHT, LIFT_HEIGHT  # the controller's own, read when the arm is built
         self.ik = ArmIK(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]))
