@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.assets.urdf_tree import RobotTree, read_urdf
-from prsc.user_assets.asset_files import ArticulatedAsset, AssetJoint, asset_spec, describe_asset, names_asset_file, resolve_asset_file
+from prsc.user_assets.asset_files import (FORWARD_YAW, ArticulatedAsset, AssetJoint, asset_spec, describe_asset, file_spec,
+                                          names_asset_file, resolve_asset_file)
 from prsc.errors import PrscError
 
 GRAVITY_COMPENSATION_DAMPING = 2.0
@@ -40,7 +41,7 @@ class RobotModel:
     source: str  # the file it comes from (the Panda: its converted MJCF)
     folders: tuple[str, ...]  # where `package://` folders are looked up
     joints: tuple[AssetJoint, ...]  # in qpos order
-    base_yaw: float  # yaw (rad, about +z) from the URDF's base frame to prsc's base frame
+    base_yaw: float  # yaw (rad, about +z) from the URDF's axes to the object's (the MJCF spec is turned already)
     root_offset: tuple[float, float, float] | None  # root frame from the box centre; None: bottom centre
     root: str  # the root link (body)
     tcp: str | None  # tool site or body
@@ -161,7 +162,7 @@ def _panda() -> RobotModel:
 @lru_cache(maxsize=64)
 def _file_model(path: str, folders: tuple[str, ...], passive: bool) -> RobotModel:
     asset: ArticulatedAsset = describe_asset(path, folders)
-    return RobotModel(asset.key, asset.source, folders, asset.joints, 0.0, asset.root_offset, asset.root,
+    return RobotModel(asset.key, asset.source, folders, asset.joints, FORWARD_YAW, asset.root_offset, asset.root,
                       asset.tcp, asset.servo_joints, passive and not asset.actuators)
 
 
@@ -207,7 +208,8 @@ def _urdf_path(model: RobotModel) -> Path:
             from prsc.assets.mjcf_urdf import mjcf_as_urdf
 
             target.parent.mkdir(parents=True, exist_ok=True)
-            root = ET.fromstring(mjcf_as_urdf(model.mjcf_spec(), target.parent))
+            # In the file's own axes, as a URDF is read: the writers turn it by base_yaw.
+            root = ET.fromstring(mjcf_as_urdf(file_spec(model.source, model.folders), target.parent))
         write_entry(target, root)
     return target
 

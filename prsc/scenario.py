@@ -82,13 +82,19 @@ class Scenario:
         return getattr(self.sampler, name)
 
     def scene(self, seed: int, index: int) -> dict[str, Any]:
-        """Scene `index` under `seed` as scene JSON (docs/scene-json.md)."""
-        return self.sampler.scene(seed, index)
+        """Scene `index` under `seed` as scene JSON (docs/scene-json.md), as `prsc run` hands it
+        to a controller: each object with its `body`, its name in the compiled model."""
+        from prsc.backends.names import with_body_names
+
+        return with_body_names(self.sampler.scene(seed, index))
 
     def scenes(self, seed: int, indices: Iterable[int] | int, start: int = 0) -> Iterator[dict[str, Any]]:
         """Scenes `indices` (or `start .. start+n-1` for an int n) under `seed`, lazily; drawn in
-        batches, vectorised over scenes, when the spec allows it (docs/sampling.md, "Batched sampling")."""
-        return self.sampler.scenes(seed, indices, start)
+        batches, vectorised over scenes, when the spec allows it (docs/sampling.md, "Batched sampling");
+        each as `scene` gives it."""
+        from prsc.backends.names import with_body_names
+
+        return map(with_body_names, self.sampler.scenes(seed, indices, start))
 
     def image_choices(self) -> dict[str, tuple[str, ...]]:
         """Per object whose `texture` is a file name or a choice among file names, every name it can

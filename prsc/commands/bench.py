@@ -27,6 +27,7 @@ import time
 from typing import Any
 
 from prsc.errors import PrscError
+from prsc.pipeline.seed_jobs import check_seed_and_jobs
 
 SAMPLERS = ("exact", "hit-and-run", "baseline")
 LAWS = ("joint", "sequential", "rejection")
@@ -184,8 +185,7 @@ def run(args: argparse.Namespace) -> int:
         raise PrscError(f"-n must be >= 1, got {args.scenes}")
     if not args.seconds > 0:  # also refuses nan, which would never stop a measurement
         raise PrscError(f"--seconds must be > 0, got {args.seconds}")
-    if args.seed < 0:
-        raise PrscError(f"--seed must be >= 0, got {args.seed}")
+    check_seed_and_jobs(args.seed)
     from prsc.ir import compile_program
 
     for path in args.files:
@@ -258,8 +258,9 @@ def _run_backends(args: argparse.Namespace) -> int:
         jobs = [int(j) for j in args.jobs.split(",") if j.strip()]
     except ValueError:
         raise PrscError(f"--jobs takes comma-separated counts, got {args.jobs!r}") from None
-    if not jobs or min(jobs) < 1:
-        raise PrscError(f"--jobs counts must be >= 1, got {args.jobs!r}")
+    if not jobs:
+        raise PrscError(f"--jobs takes comma-separated counts, got {args.jobs!r}")
+    check_seed_and_jobs(args.seed, jobs)
     targets = [t.strip() for t in (args.target or ",".join(TARGETS)).split(",") if t.strip()]
     unknown = [t for t in targets if t not in TARGETS]
     if unknown or not targets:

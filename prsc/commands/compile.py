@@ -36,6 +36,7 @@ from prsc.pipeline.output_folder import (
 )
 from prsc.pipeline.scene_sources import add_law_argument, add_proposal_argument, proposal_from_json, proposal_key
 from prsc.pipeline.scene_job import Job, render_one, worker_render
+from prsc.pipeline.seed_jobs import check_seed_and_jobs
 from prsc.pipeline.scene_sources import read_input, read_proposal, read_scene_file
 from prsc.pipeline.progress import progress_bar
 from prsc.commands.settle import SETTLE_HELP, settle_check, settle_targets
@@ -136,10 +137,7 @@ def compile_scenes(file: str, targets: Sequence[str], n: int | None, seed: int, 
         raise PrscError(f"unknown target {', '.join(unknown) or '(none)'}; choose from {', '.join(TARGETS)}")
     if n is not None and n < 0:
         raise PrscError(f"-n must be >= 0, got {n}")
-    if settings.jobs < 1:
-        raise PrscError(f"--jobs must be >= 1, got {settings.jobs}")
-    if seed < 0:
-        raise PrscError(f"--seed must be >= 0, got {seed}")
+    check_seed_and_jobs(seed, settings.jobs)
     if not output:
         raise PrscError("the output folder path is empty")
     path = Path(file)

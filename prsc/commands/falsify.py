@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from prsc.pipeline.executors import add_executor_arguments
+from prsc.pipeline.seed_jobs import check_seed_and_jobs
 from prsc.pipeline.tables import print_table
 from prsc.constraints.polytope_ir import COLLISION
 from prsc.errors import PrscError
@@ -108,8 +109,9 @@ def run(args: argparse.Namespace) -> int:
         raise PrscError(f"--budget must be >= 1, got {args.budget}")
     if args.rounds < 1:
         raise PrscError(f"--rounds must be >= 1, got {args.rounds}")
-    if args.jobs < 1 or args.seed < 0 or not args.max_sim_seconds > 0:
-        raise PrscError("--jobs must be >= 1, --seed >= 0 and --max-sim-seconds > 0")
+    check_seed_and_jobs(args.seed, args.jobs)
+    if not args.max_sim_seconds > 0:
+        raise PrscError(f"--max-sim-seconds must be > 0, got {args.max_sim_seconds:g}")
     from prsc.runner.gl import choose_gl_backend
 
     gl_backend = choose_gl_backend()  # before anything imports mujoco

@@ -39,8 +39,6 @@ from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, contains, ring_from_rays, ring_json
 from prsc.geometry.rotations import quat_to_matrix
 
-APPROACH = 0.12  # m: the controller's approach height above the grasp point
-LIFT = 0.15  # m: the controller's lift
 HEIGHTS = (0.0, 0.05, 0.15)  # m above the base: the levels the ring spans
 SECTORS = 48
 RADII = tuple(round(0.1 + 0.05 * i, 3) for i in range(19))  # the coarse scan, m
@@ -57,8 +55,10 @@ class TopDownReach:
 
     def __init__(self) -> None:
         from prsc.assets import panda
+        from prsc.runner.grasping import APPROACH_HEIGHT, LIFT_HEIGHT
         from prsc.runner.ik import ArmIK
 
+        self.approach, self.lift = APPROACH_HEIGHT, LIFT_HEIGHT  # the controller's own, read when the arm is built
         self.ik = ArmIK(np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]))
         self.home = np.array(panda.HOME_QPOS)
         self.down = self.ik.tcp_pose(self.home)[1]
@@ -69,12 +69,12 @@ class TopDownReach:
         each from the previous solution, none putting a link into another."""
         point = np.asarray(point, float)
         up = np.array([0.0, 0.0, 1.0])
-        approach = point + APPROACH * up
+        approach = point + self.approach * up
         for solution in self.ik.solutions_from_home(approach, self.down):
             if not solution.reached:
                 continue
             down = self.ik.solve_line(approach, point, self.down, solution.q, free=True)
-            if down[-1].reached and self.ik.solve_line(point, point + LIFT * up, self.down, down[-1].q, free=True)[-1].reached:
+            if down[-1].reached and self.ik.solve_line(point, point + self.lift * up, self.down, down[-1].q, free=True)[-1].reached:
                 return True
         return False
 
@@ -122,8 +122,8 @@ def _boundary(reach: TopDownReach, angle: float, height: float, inside: float, o
 
 def panda_ring(rays: dict, angles: list[float]) -> ReachRing:
     """The reach kept over the heights: an outer cell minus a hole and a gap
-    (prsc/constraints/reach_ring.py); the rays' angles turn from +y (ahead here) to the ring's
-    x-ahead convention by +90 deg."""
+    (prsc/constraints/reach_ring.py); the rays' angles (0: ahead, +y) turn to the ring's (0: +x)
+    by +90 deg."""
     per_ray = [[rays[k, j] for k in range(len(HEIGHTS))] for j in range(SECTORS)]
     return ring_from_rays([a + math.pi / 2 for a in angles[:SECTORS]], list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)
 
@@ -157,10 +157,12 @@ def reach_data(rays: dict[tuple[int, int], tuple[float, float] | None]) -> dict:
     angles = _angles()
     rays = {**rays, **{(k, SECTORS): rays[k, 0] for k in range(len(HEIGHTS))}}
     ring = panda_ring(rays, angles)
+    from prsc.runner.grasping import APPROACH_HEIGHT, LIFT_HEIGHT
+
     return {
         "robot": "panda",
         "frame": "the arm's base: origin at the bottom centre of the Robot box, +y ahead, +z up",
-        "grasp": f"tool centre at the point, {APPROACH} m and {LIFT} m above it, gripper pointing down as at home",
+        "grasp": f"tool centre at the point, {APPROACH_HEIGHT} m and {LIFT_HEIGHT} m above it, gripper pointing down as at home",
         "heights": list(HEIGHTS),
         "angles": angles[:SECTORS],
         "rays": [[k, j, *(rays[k, j] or (None, None))] for k in range(len(HEIGHTS)) for j in range(SECTORS)],
@@ -353,8 +355,8 @@ def _plot(ring: ReachRing, grid: ReachGrid, path: str, name: str) -> None:
             axes.scatter(grid.points[mask, 0], grid.points[mask, 1], s=4, color=colour, label=label)
     axes.plot([0], [0], "k+", label="base")
     axes.set_aspect("equal")
-    axes.set_xlabel("x (m, ahead)")
-    axes.set_ylabel("y (m)")
+    axes.set_xlabel("x (m, right)")
+    axes.set_ylabel("y (m, ahead)")
     axes.set_title(f"{name}: top-down reach at the root's height\n(the ring `reachable by` keeps, against the IK)",
                    fontsize=10)
     axes.legend(loc="lower left", fontsize=8)

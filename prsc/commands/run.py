@@ -29,6 +29,7 @@ from typing import Any
 from prsc.pipeline.campaign import RESULTS, Results, episode_tasks, refuse_foreign_results, run_episodes
 from prsc.pipeline.executors import add_executor_arguments, cpu_seconds
 from prsc.pipeline.scene_sources import add_law_argument, add_proposal_argument, read_proposal
+from prsc.pipeline.seed_jobs import check_seed_and_jobs
 from prsc.errors import PrscError
 
 STRIPS = "strips.json"  # in failures/: the strips prsc wrote there, the only ones it replaces
@@ -103,12 +104,9 @@ def _campaign_key(manifest: dict, args: argparse.Namespace, controller_digest: s
 def _validate(args: argparse.Namespace) -> None:
     if args.n is not None and args.n < 1:
         raise PrscError(f"-n must be >= 1, got {args.n}")
-    if args.jobs < 1:
-        raise PrscError(f"--jobs must be >= 1, got {args.jobs}")
+    check_seed_and_jobs(args.seed, args.jobs)
     if args.video < 0:
         raise PrscError(f"--video must be >= 0, got {args.video}")
-    if args.seed < 0:
-        raise PrscError(f"--seed must be >= 0, got {args.seed}")
     if not args.max_sim_seconds > 0:
         raise PrscError(f"--max-sim-seconds must be > 0, got {args.max_sim_seconds:g}")
     if args.record is None and any(getattr(args, k) != v for k, v in RECORD_DEFAULTS.items()):

@@ -8,7 +8,8 @@ Top-down means the tool frame's +z (the flange normal of a URDF arm's last link,
 `tcp` site's z) points straight down, any yaw. A point counts as reached when a damped
 least-squares IK on the arm's MuJoCo model brings the tool there within 2 mm and 0.02 rad,
 and also 12 cm above it (the approach). Along each ray from the base (SECTORS all the way
-round, +x of the file's root frame ahead, the ROS convention) and at each height (HEIGHTS
+round, in the object's axes: the file's +x, the ROS forward, turned to the object's ahead,
++y, by asset_spec) and at each height (HEIGHTS
 above the root's origin) the reachable radii are scanned every STEP and both ends bisected
 to 3 mm. Each bound is then shrunk by a margin: between two rays the reach is taken to be
 no less than at the nearer of them, less the margin.
@@ -32,7 +33,7 @@ from prsc.user_assets.asset_files import ArticulatedAsset, asset_spec, build_roo
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "8"  # the IK (prsc/user_assets/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "9"  # 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK (prsc/user_assets/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
@@ -52,14 +53,15 @@ INNER_MARGIN = 0.005
 
 @dataclass(frozen=True)
 class ArmReach:
-    """The reach's rows in the arm's root frame, and the rays they were built from."""
+    """The reach's rows about the arm's root in its object's axes, and the rays they were built from."""
 
     ring: ReachRing
     rays: tuple[tuple[float, float, float | None, float | None], ...]  # (height, angle, inner, outer)
 
 
 class TopDownIK:
-    """The arm alone (its file's model), asked whether its tool reaches points top-down (root frame)."""
+    """The arm alone (its file's model, turned as its object), asked whether its tool reaches
+    points top-down (about its root, in its object's axes)."""
 
     def __init__(self, asset: ArticulatedAsset) -> None:
         import mujoco
@@ -103,7 +105,7 @@ class TopDownIK:
 
 
 def _ray_point(angle: float, radius: float, height: float) -> np.ndarray:
-    """The point at `radius` along the ray `angle` (0: ahead, +x; positive towards +y)."""
+    """The point at `radius` along the ray `angle` (0: the object's +x, its right; pi/2: ahead, +y)."""
     return np.array([radius * math.cos(angle), radius * math.sin(angle), height])
 
 
@@ -168,7 +170,7 @@ def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | No
 
 
 def ray_angles() -> list[float]:
-    """The rays' directions, all the way round from straight behind (radians, 0 ahead)."""
+    """The rays' directions, all the way round from the object's -x (radians, 0 its +x, pi/2 ahead)."""
     return [-math.pi + 2 * math.pi * j / SECTORS for j in range(SECTORS)]
 
 
@@ -257,7 +259,7 @@ def arm_reach(asset: ArticulatedAsset) -> ArmReach:
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write(path, json.dumps({
         "asset": os.path.basename(asset.source), "sha256": asset.digest,
-        "frame": "the arm's root frame: origin at the root body, +x ahead, +z up",
+        "frame": "the arm's object's axes about its root body: +y ahead (the file's +x), +z up",
         "reach": "A p <= b, and neither hole_A p < hole_b nor gap_A p < gap_b",
         **ring_json(reach.ring),
         "rays": [list(r) for r in reach.rays],

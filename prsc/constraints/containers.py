@@ -2,7 +2,8 @@
 
 `on X` for a container X (a class declaring an interior, docs/language.md "Containers")
 puts the object on X's floor, inside X's box: the walls, not X's box, bound it there, so
-the sampler does not test the object's box against X's.
+the sampler does not test the object's box against X's. The walls are kept clear by the
+placement's own rows instead: the footprint inside them (specifier_rows._rows_in_container).
 """
 
 from __future__ import annotations

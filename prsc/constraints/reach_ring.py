@@ -91,7 +91,7 @@ def _extended(heights: list[float], radii: list[float], pad: float) -> list[tupl
 
 def ring_from_rays(angles: list[float], heights: list[float], rays: list[list[Ray]], margin: float,
                    inner_margin: float) -> ReachRing:
-    """The ring kept of rays at `angles` (radians, increasing, all the way round, x ahead;
+    """The ring kept of rays at `angles` (radians about +z from +x, increasing, all the way round;
     evenly spaced but for rays added where the reach ends, as arm_reach does), measured at
     each of `heights` (rays[j][k]: ray j at height k, increasing).
 

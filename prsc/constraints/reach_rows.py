@@ -7,7 +7,7 @@ For the Panda, prsc/constraints/panda_reach.json holds them in the arm base's fr
 the tool centre reaches with the gripper pointing down (the handover's grasp). It is
 computed once from the arm's kinematics by `python -m prsc.commands.reach` and checked
 against the IK by tests/constraints/test_reach.py. An arm from a file gets the same from
-its own kinematics (arm_reach.py). docs/sampling.md says how much of the reach they keep.
+its own kinematics (arm_reach.py), in its object's axes too (+y ahead). docs/sampling.md says how much of the reach they keep.
 """
 
 from __future__ import annotations

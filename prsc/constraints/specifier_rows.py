@@ -104,7 +104,7 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
         pos, rot, dims = _placed(target, span)
         interior = interior_of(target, span, inside_asset or inside)
         if interior is not None:
-            return _rows_in_container(pos, rot, interior, completely, support, label)
+            return _rows_in_container(pos, rot, interior, support, label)
         if inside:
             word = "completely in" if completely else "in"
             raise PrscError(f"`{word} {target.name}` needs a container (a class declaring {', '.join(INTERIOR_PROPERTIES)}, "
@@ -162,14 +162,14 @@ def interior_of(target: ObjectValue, span: Span | None, inside_asset: bool = Fal
         raise PrscError(f"{target.name}: {error}", span) from None
 
 
-def _rows_in_container(
-    pos: np.ndarray, rot: np.ndarray, interior: Interior, completely: bool, support: Support, label: int
-) -> Polytope:
-    """On a container: rest on its floor's top, centre (footprint if completely) inside the walls."""
+def _rows_in_container(pos: np.ndarray, rot: np.ndarray, interior: Interior, support: Support, label: int) -> Polytope:
+    """On a container, `on` or `completely on`: rest on its floor's top with the footprint inside
+    the walls. The walls rise from the floor, so a footprint across one is a collision (LANGUAGE.md
+    §5), which the box test cannot see: the container's box holds the object (constraints/containers.py)."""
     u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
     normals, offsets = interior.edges()
     a = normals[:, :1] * u + normals[:, 1:] * v
-    b = a @ pos + offsets - (support(a) if completely else 0.0)
+    b = a @ pos + offsets - support(a)
     floor = pos + n * interior.floor_top
     rest = float(n @ floor + support(n[None, :])[0])
     return Polytope(a, b, n[None, :], np.array([rest]), np.full(len(b), label), np.full(1, label))

@@ -8,8 +8,11 @@ import numpy as np
 from prsc.assets import panda
 from prsc.runner.motion import Arm, Simulation
 from prsc.geometry.rotations import quat_to_matrix
+from prsc.user_assets.arm_ik import REACH_APPROACH
 
-APPROACH_HEIGHT = 0.12  # m above the cube centre before descending
+# m above the cube centre before descending: the approach `reachable by` certifies for every
+# arm; the Panda's reach builder (prsc/commands/reach.py) reads these two.
+APPROACH_HEIGHT = REACH_APPROACH
 LIFT_HEIGHT = 0.15  # m the cube is lifted
 PLACE_CLEARANCE = 0.012  # m between the cube's bottom and the surface when released
 SLIP_TOLERANCE = 0.02  # m the cube may shift in the gripper between lift and release

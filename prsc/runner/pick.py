@@ -32,6 +32,9 @@ LIFTED = 0.5 * LIFT  # m the cube must rise with the gripper to count as lifted
 GRIP_TIME = 1.0  # simulated s for the fingers to open or close
 GRASP_RESTARTS = 16  # starts drawn within the joint limits where home turned towards a cube fails:
 # with prsc.user_assets.arm_ik.RESTARTS (4), 4 of 20 Franka episodes found no grasp of a cube 0.43-0.48 m away
+CLEARANCE = 0.15  # m above the first waypoint where the arm arrives from its starting pose: the joint-space
+# line from a Franka standing straight up to a pose 12 cm above a cube near its base swept the fingers
+# through that cube (3 cm) in 2 of 20 episodes; from higher up it descends in the straight steps below
 DESCENT_STEP = 0.03  # m between the waypoints down onto a cube: a servo's path between two
 # poses is a line in joint space, which near the edge of the reach swings the fingers into the cube
 
@@ -63,7 +66,9 @@ class Pick:
                 return {"outcome": "unreachable", "reason": f"no top-down grasp of {cube['name']}", "lift": rise}
             down = list(zip(plan, points))
             up = down[::-1]
-            for q, point in down:
+            clear = points[0] + np.array([0.0, 0.0, CLEARANCE])
+            q_clear, ok = solve_top_down(model, scratch, arm, clear, plan[0])
+            for q, point in ([(q_clear, clear)] if ok else []) + down:
                 ramp(model, data, drive, q)
                 error = settle(model, data, arm, point)
                 if error > TOLERANCE:

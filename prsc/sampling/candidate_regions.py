@@ -240,7 +240,8 @@ def _rectangle(rt: ObjectRuntime, placed: Placed, reach: float, compiler: Candid
         half = (float(offsets[0]), float(offsets[2]))
     else:
         half = (carrier.dims[0] / 2, carrier.dims[1] / 2)
-    completely = bool(rule.option("completely"))
+    # In a container the walls keep the footprint inside them, `on` as `completely on` (specifier_rows).
+    completely = bool(rule.option("completely")) or interior is not None
     lift = interior.floor_top if interior is not None else carrier.dims[2] / 2
     # The object's box lies in this prism on the face, in the carrier's frame (beyond its sides
     # by up to its reach unless `completely`); the centre in the same prism.

@@ -2,7 +2,9 @@
 frozen description that the IR (sizes, joint checks), the constraint stage (`reachable by`),
 the backends and the runner all read.
 
-A file becomes a MuJoCo model in exactly one way, `asset_spec`: a URDF has its
+A file becomes a MuJoCo model in exactly one way, `asset_spec`: the file's own model
+(`file_spec`) turned so that its +x, the ROS forward, is its object's ahead (+y;
+LANGUAGE.md §7 "Forward"). In `file_spec` a URDF has its
 `package://` and relative mesh paths resolved and MuJoCo's URDF import told to keep visual
 geoms and static links (docs/assets.md); an MJCF has its asset paths made absolute, so
 the model can be attached into any scene and saved anywhere. Inertias that break the
@@ -34,6 +36,9 @@ ASSET_SUFFIXES = (".urdf", ".xml", ".mjcf")
 ROOT_OFFSET = "rootOffset"
 """The property (and scene JSON `properties` key) holding where a file asset's root sits in its
 object's box, from the box centre: the IR sets it from the box at the object's joint values."""
+FORWARD_YAW = math.pi / 2
+"""The turn (rad about +z) from a file's own axes to its object's: the file's +x, the ROS
+forward, becomes the object's ahead (+y), where the built-in robot faces (LANGUAGE.md §7)."""
 JOINT_KINDS = {3: "revolute", 2: "prismatic"}
 """MuJoCo joint types (mjJNT_HINGE, mjJNT_SLIDE) the description keeps, by URDF name."""
 
@@ -198,8 +203,9 @@ def _hide_collision_geoms(spec) -> None:
             geom.group = COLLISION_GROUP
 
 
-def asset_spec(path: Path | str, folders: Sequence[str] = ()):
-    """A fresh `mujoco.MjSpec` of an asset file, ready to attach (the one file-to-model path)."""
+def file_spec(path: Path | str, folders: Sequence[str] = ()):
+    """A fresh `mujoco.MjSpec` of an asset file in the file's own axes (what writers of the
+    file's own form read: its scaled copy, the URDF of an MJCF)."""
     import mujoco
 
     path = Path(path)
@@ -215,6 +221,40 @@ def asset_spec(path: Path | str, folders: Sequence[str] = ()):
         raise PrscError(f"cannot load {path.name} in MuJoCo: {str(error).strip().splitlines()[0]}") from None
     mujoco_readable_meshes(spec, build_root() / "assets")
     return spec
+
+
+def asset_spec(path: Path | str, folders: Sequence[str] = ()):
+    """A fresh `mujoco.MjSpec` of an asset file in its object's axes, ready to attach (the one
+    file-to-model path): the file's model turned by FORWARD_YAW."""
+    spec = file_spec(path, folders)
+    _turn_forward(spec)
+    return spec
+
+
+def _turn_forward(spec) -> None:
+    """Turn everything the file places in its world by FORWARD_YAW about the world's origin."""
+    import mujoco
+    import numpy as np
+
+    c, s = math.cos(FORWARD_YAW), math.sin(FORWARD_YAW)
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    yaw = np.array([math.cos(FORWARD_YAW / 2), 0.0, 0.0, math.sin(FORWARD_YAW / 2)])
+    world = spec.worldbody
+    for element in (*world.bodies, *world.frames, *world.geoms, *world.sites, *world.cameras):
+        quat = np.array(element.quat, dtype=float)
+        if element.alt.type != mujoco.mjtOrientation.mjORIENTATION_QUAT:
+            quat = np.array(spec.resolve_orientation(spec.compiler.degree, spec.compiler.eulerseq, element.alt))
+            element.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+        turned = np.zeros(4)
+        mujoco.mju_mulQuat(turned, yaw, quat)
+        element.quat = turned
+        element.pos = turn @ np.asarray(element.pos, dtype=float)
+        fromto = np.asarray(getattr(element, "fromto", [math.nan]), dtype=float)
+        if not np.isnan(fromto).any():
+            element.fromto = np.concatenate([turn @ fromto[:3], turn @ fromto[3:]])
+    for light in world.lights:
+        light.pos = turn @ np.asarray(light.pos, dtype=float)
+        light.dir = turn @ np.asarray(light.dir, dtype=float)
 
 
 def describe_asset(path: Path | str, folders: Sequence[str] = ()) -> ArticulatedAsset:
@@ -264,7 +304,7 @@ def _describe(source: str, folders: tuple[str, ...], inputs: tuple[tuple[str, in
 
 def _geometry_box(model, qpos, root: int) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """The box (low and high corners) of every geom at joint positions `qpos`, about the root
-    body's origin in the file's own axes (an MJCF root turned in its file stays turned)."""
+    body's origin in the object's axes (asset_spec's; an MJCF root turned in its file stays turned)."""
     import mujoco
     import numpy as np
 

@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.user_assets.asset_cache import bundle_mjcf, bundle_urdf, entry_usable, inputs_digest, write_entry
-from prsc.user_assets.asset_files import asset_spec, build_root, urdf_with_absolute_paths
+from prsc.user_assets.asset_files import build_root, file_spec, urdf_with_absolute_paths
 from prsc.user_assets.urdf_source import parse_urdf
 
 SCALE_VERSION = "2"  # 2: a folder per copy, its meshes copied in
@@ -83,7 +83,7 @@ def _scaled_mjcf(path: Path, s: float, folders: Sequence[str]) -> ET.Element:
     import mujoco
     import numpy as np
 
-    spec = asset_spec(path, folders)
+    spec = file_spec(path, folders)  # the copy keeps the file's own axes; reading it turns it
     slides = {j.name for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_SLIDE}
     model = spec.compile()  # the keyframes' qpos addresses, before anything moves
     lengths = np.ones(model.nq)

@@ -2,9 +2,12 @@
 URDF written from its width, length, height and drawer count, so a spec without files of
 its own can put things in drawers.
 
-Its frame: the back at -y, the drawers open along +y. Links `carcass` and `drawer0`
-(lowest) to `drawer{n-1}`; joints `drawer0_slide`, ... (prismatic along +y, 0 to 0.8 of
-the depth). Each drawer is a floor walled on four sides (its front panel is the fourth),
+Its object's axes: the back at -y, the drawers open along +y (ahead). The file is written
+in the ROS convention, front at +x, as every file is read (its +x turned to its object's
++y, LANGUAGE.md §7 "Forward"): the boxes below are laid out in the object's axes and
+written in the file's (`_file_axes`). Links `carcass` and `drawer0`
+(lowest) to `drawer{n-1}`; joints `drawer0_slide`, ... (prismatic along the file's +x, 0
+to 0.8 of the depth). Each drawer is a floor walled on four sides (its front panel is the fourth),
 so `in cab.links["drawer1"]` places on that floor. The file is written once per set of
 numbers into the build folder and then read as any user URDF is.
 
@@ -30,7 +33,7 @@ OPENING = 0.8  # a drawer slides out up to this fraction of the depth
 DENSITY = 600.0  # kg/m^3: wood
 MAX_DRAWERS = 8
 COLOR = "0.62 0.45 0.3 1"
-VERSION = "1"  # bump when the file written for the same numbers changes
+VERSION = "2"  # 2: written front at +x (ROS). Bump when the file written for the same numbers changes
 
 
 @dataclass(frozen=True)
@@ -75,8 +78,16 @@ def _drawer(width: float, length: float, bay: float) -> list[_Box]:
             _Box("front", (0, depth / 2 - front / 2, (bay - GAP) / 2), (width - 2 * PANEL, front, bay - GAP))]
 
 
+def _file_axes(box: _Box) -> _Box:
+    """A box laid out in the object's axes (ahead +y) in the file's (ahead +x): (x, y) -> (y, -x)."""
+    (x, y, z), (sx, sy, sz) = box.centre, box.size
+    return _Box(box.name, (y, -x if x else 0.0, z), (sy, sx, sz))
+
+
 def _link(name: str, boxes: list[_Box]) -> str:
-    """A URDF link of boxes, each both seen and colliding, with the inertia of their union's box."""
+    """A URDF link of boxes (in the object's axes), each both seen and colliding, with the
+    inertia of their union's box, written in the file's axes."""
+    boxes = [_file_axes(box) for box in boxes]
     volume = sum(b.size[0] * b.size[1] * b.size[2] for b in boxes)
     mass = DENSITY * volume
     low = [min(b.centre[i] - b.size[i] / 2 for b in boxes) for i in range(3)]
@@ -110,7 +121,7 @@ def cabinet_text(width: float, length: float, height: float, drawers: int) -> st
         y = -length / 2 + PANEL + GAP + depth / 2  # from the back panel (and a gap) to the carcass front
         z = PANEL + k * (bay + PANEL)
         lines.append(f'  <joint name="drawer{k}_slide" type="prismatic"><parent link="carcass"/>'
-                     f'<child link="drawer{k}"/><origin xyz="0 {y!r} {z!r}"/><axis xyz="0 1 0"/>'
+                     f'<child link="drawer{k}"/><origin xyz="{y!r} 0 {z!r}"/><axis xyz="1 0 0"/>'
                      f'<limit lower="0" upper="{OPENING * depth!r}" effort="100" velocity="1"/></joint>')
     lines.append("</robot>")
     return "\n".join(lines) + "\n"

@@ -150,8 +150,15 @@ def test_spec_attaches_with_prefix_and_saves(tmp_path):
     frame = mount.add_frame()
     frame.attach_body(panda.panda_mjcf_spec().body(panda.BASE_BODY), "r1/", "")
     model = scene.compile()
-    assert model.actuator("r1/joint1").id >= 0 and model.site("r1/tcp").id >= 0
-    assert model.actuator("r1/gripper").id >= 0
+    # The prefixed actuators drive the prefixed arm joint and the first finger (the second follows
+    # by an equality), and the tool site is on the hand (a missing name is a KeyError; these check what the names hold).
+    joint1 = model.actuator("r1/joint1").id
+    assert model.actuator_trntype[joint1] == mujoco.mjtTrn.mjTRN_JOINT
+    assert model.joint(model.actuator_trnid[joint1, 0]).name == "r1/joint1"
+    gripper = model.actuator("r1/gripper").id
+    assert model.actuator_trntype[gripper] == mujoco.mjtTrn.mjTRN_JOINT
+    assert model.joint(model.actuator_trnid[gripper, 0]).name == "r1/finger_joint1"
+    assert model.body(model.site("r1/tcp").bodyid[0]).name == "r1/hand"
     path = tmp_path / "scene.xml"
     path.write_text(scene.to_xml())
     reloaded = mujoco.MjModel.from_xml_path(str(path))

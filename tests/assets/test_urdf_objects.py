@@ -97,10 +97,12 @@ def _come_to_rest(path: Path) -> None:
 
 
 def _tray_extent() -> list[float]:
-    """The extent of every object of the tray's OBJ, times the URDF's mesh scale 0.5 (trimesh reads them all)."""
+    """The extent of every object of the tray's OBJ, times the URDF's mesh scale 0.5 (trimesh reads them
+    all), in the object's axes: the file's x along the object's y (LANGUAGE.md §7, "Forward")."""
     import trimesh
 
-    return (trimesh.load(DATA / "tray" / "tray_textured4.obj", force="mesh").extents * 0.5).tolist()
+    x, y, z = (trimesh.load(DATA / "tray" / "tray_textured4.obj", force="mesh").extents * 0.5).tolist()
+    return [y, x, z]
 
 
 def _keeps_the_urdf_colour(root: Path, name: str, urdf: Path) -> None:

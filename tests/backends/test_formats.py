@@ -46,12 +46,18 @@ def test_mjcf_follows_the_runner_naming(handmade):
 
     scene, root = _files(handmade, "table_cube")
     model = readback.mjcf_model(root / "mjcf" / "00000.xml")
+    # Each name holds what the runner drives through it (a missing name is a KeyError already).
     for robot in ("r1", "r2"):
-        for name in [f"joint{i}" for i in range(1, 8)] + ["gripper"]:
-            assert model.actuator(f"{robot}/{name}").id >= 0
-        assert model.site(f"{robot}/tcp").id >= 0
-        assert model.body(f"{robot}/base").id >= 0
-    assert model.camera("camera").id >= 0
+        for name in [f"joint{i}" for i in range(1, 8)]:
+            actuator = model.actuator(f"{robot}/{name}").id
+            assert model.actuator_trntype[actuator] == mujoco.mjtTrn.mjTRN_JOINT
+            assert model.joint(model.actuator_trnid[actuator, 0]).name == f"{robot}/{name}"
+        gripper = model.actuator(f"{robot}/gripper").id
+        assert model.actuator_trntype[gripper] == mujoco.mjtTrn.mjTRN_JOINT
+        assert model.joint(model.actuator_trnid[gripper, 0]).name == f"{robot}/finger_joint1"
+        assert model.body_parentid[model.body(f"{robot}/base").id] == model.body(robot).id
+        assert model.body(model.site(f"{robot}/tcp").bodyid[0]).name == f"{robot}/hand"
+    assert model.body(model.camera("camera").bodyid[0]).name == "camera"
     for o in scene["objects"]:
         body = model.body(o["name"])
         has_free = any(model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE for j in range(body.jntadr[0], body.jntadr[0] + body.jntnum[0]))

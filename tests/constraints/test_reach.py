@@ -147,3 +147,15 @@ def test_explain_shows_the_rows_and_their_source(capsys):
     entry = next(e for e in json.loads(capsys.readouterr().out)["rules"] if e["kind"] == "reachable" and e["object"] == "c1")
     assert entry["line"] == line and entry["rows_are"] == "the same in every scene" and len(entry["rows"]["A"]) > 4
     assert not math.isnan(entry["rows"]["b"][0])
+
+
+def test_the_reach_builder_certifies_the_controllers_own_heights(arm, monkeypatch):
+    """The Panda's reach builder reads the handover's approach and lift (prsc/runner/grasping.py),
+    not copies of them: a lift no arm makes leaves a point it reaches out of reach."""
+    from prsc.commands.reach import TopDownReach
+    from prsc.runner import grasping
+
+    point = np.array([0.0, 0.45, 0.05])
+    assert arm.reaches(point)
+    monkeypatch.setattr(grasping, "LIFT_HEIGHT", 3.0)
+    assert not TopDownReach().reaches(point)
