@@ -8,7 +8,7 @@ import os
 import xml.etree.ElementTree as ET
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator
 
 if TYPE_CHECKING:
     import mujoco
@@ -95,6 +95,13 @@ class Scenario:
         from prsc.backends.names import with_body_names
 
         return map(with_body_names, self.sampler.scenes(seed, indices, start))
+
+    def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
+        """index -> scene under `seed`, as `scene` gives it, drawn `ahead` at a time where the spec batches."""
+        from prsc.backends.names import with_body_names
+
+        draw = self.sampler.drawer(seed, ahead)
+        return lambda index: with_body_names(draw(index))
 
     def image_choices(self) -> dict[str, tuple[str, ...]]:
         """Per object whose `texture` is a file name or a choice among file names, every name it can

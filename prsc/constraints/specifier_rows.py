@@ -164,8 +164,8 @@ def interior_of(target: ObjectValue, span: Span | None, inside_asset: bool = Fal
 
 def _rows_in_container(pos: np.ndarray, rot: np.ndarray, interior: Interior, support: Support, label: int) -> Polytope:
     """On a container, `on` or `completely on`: rest on its floor's top with the footprint inside
-    the walls. The walls rise from the floor, so a footprint across one is a collision (LANGUAGE.md
-    §5), which the box test cannot see: the container's box holds the object (constraints/containers.py)."""
+    the walls. The walls rise from the floor, so a footprint across one is a collision (docs/language.md,
+    guarantees), which the box test cannot see: the container's box holds the object (constraints/container_pairs.py)."""
     u, v, n = rot[:, 0], rot[:, 1], rot[:, 2]
     normals, offsets = interior.edges()
     a = normals[:, :1] * u + normals[:, 1:] * v

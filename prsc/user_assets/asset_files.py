@@ -4,7 +4,7 @@ the backends and the runner all read.
 
 A file becomes a MuJoCo model in exactly one way, `asset_spec`: the file's own model
 (`file_spec`) turned so that its +x, the ROS forward, is its object's ahead (+y;
-LANGUAGE.md §7 "Forward"). In `file_spec` a URDF has its
+docs/assets.md, "Forward"). In `file_spec` a URDF has its
 `package://` and relative mesh paths resolved and MuJoCo's URDF import told to keep visual
 geoms and static links (docs/assets.md); an MJCF has its asset paths made absolute, so
 the model can be attached into any scene and saved anywhere. Inertias that break the
@@ -38,7 +38,7 @@ ROOT_OFFSET = "rootOffset"
 object's box, from the box centre: the IR sets it from the box at the object's joint values."""
 FORWARD_YAW = math.pi / 2
 """The turn (rad about +z) from a file's own axes to its object's: the file's +x, the ROS
-forward, becomes the object's ahead (+y), where the built-in robot faces (LANGUAGE.md §7)."""
+forward, becomes the object's ahead (+y), where the built-in robot faces (docs/assets.md, "Forward")."""
 JOINT_KINDS = {3: "revolute", 2: "prismatic"}
 """MuJoCo joint types (mjJNT_HINGE, mjJNT_SLIDE) the description keeps, by URDF name."""
 

@@ -4,7 +4,7 @@ its own can put things in drawers.
 
 Its object's axes: the back at -y, the drawers open along +y (ahead). The file is written
 in the ROS convention, front at +x, as every file is read (its +x turned to its object's
-+y, LANGUAGE.md §7 "Forward"): the boxes below are laid out in the object's axes and
++y, docs/assets.md, "Forward"): the boxes below are laid out in the object's axes and
 written in the file's (`_file_axes`). Links `carcass` and `drawer0`
 (lowest) to `drawer{n-1}`; joints `drawer0_slide`, ... (prismatic along the file's +x, 0
 to 0.8 of the depth). Each drawer is a floor walled on four sides (its front panel is the fourth),
