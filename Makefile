@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: setup test demo docs datasets bench casestudy casestudy-check clean lerobot-check
+.PHONY: setup test test-cluster demo docs datasets bench casestudy casestudy-check clean lerobot-check
 
 setup: $(STAMP)
 
@@ -20,7 +20,12 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist loadfile
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "not cluster"
+
+# A local multi-node Ray cluster losing a node (tests/runner/test_ray_nodes.py): about a minute of
+# waiting on nodes, kept out of `make test`'s 4 minutes; CI runs it after the suite.
+test-cluster: $(STAMP)
+	$(PY) -m pytest -q -m cluster tests/runner/test_ray_nodes.py
 
 # The documentation site (mkdocs.yml) into site/: the [docs] extra goes into .venv beside
 # what setup installs (not part of `make test`'s install). --strict: a warning fails the build

@@ -24,6 +24,8 @@ import pytest
 ray = pytest.importorskip("ray", reason="Ray is not installed (make setup installs it: pip install -e '.[dev,ray]')")
 from ray.cluster_utils import Cluster  # noqa: E402
 
+pytestmark = pytest.mark.cluster  # make test-cluster; CI runs it after make test
+
 REPO = Path(__file__).resolve().parents[2]
 CUBES = REPO / "tests" / "data" / "three_cubes.prs"
 GL = ("MUJOCO_GL", "PYOPENGL_PLATFORM")
