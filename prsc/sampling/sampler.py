@@ -160,6 +160,11 @@ class Sampler:
         """Whether scenes are drawn in batches (`unbatched_because` says why not)."""
         return self._batch is not None
 
+    @property
+    def proposal(self) -> Proposal | None:
+        """The proposal the next scenes are drawn from (None: a sampler built without one)."""
+        return getattr(self._engine, "proposal", None)
+
     def set_proposal(self, proposal: Proposal) -> None:
         """Draw the next scenes from `proposal` instead (a sampler built with one), keeping the compiled spec and its cut cells."""
         if not isinstance(self._engine, SequentialSampler) or self._engine.proposal is None:
