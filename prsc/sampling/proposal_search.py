@@ -1,7 +1,7 @@
 """How a falsification proposal learns from the episodes so far: a failure-rate tree, or cross-entropy.
 
 Each step maps (the current proposal, the cells' spec masses by site, the episodes so far as
-(features, weight, elite)) to the next round's proposal (prsc/sampling/proposal.py). The
+Episodes) to the next round's proposal (prsc/sampling/proposal.py). The
 *elite* episodes are those the next round leans toward (near_failures): the failures, or,
 steered by robustness, every episode at or below an adaptive level of robustness that falls
 to 0 (multilevel cross-entropy). The conditional elite rate does not depend on the proposal
@@ -16,7 +16,6 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from prsc.sampling.proposal import DEFAULT_EPS, SITE_EPS, Component, Proposal, grid_index
-
 
 ELITE_QUANTILE = 0.1  # multilevel cross-entropy: the share of the episodes so far under the next level
 MIN_ELITE = 4  # ... and at least this many episodes
@@ -195,6 +194,9 @@ def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episode
                       sharpness: float = 0.5, min_leaf: int = 8, depth: int = 5, replay: float = 0.7,
                       replay_spec_share: float = 0.0, replay_focus: float = 1.0) -> Proposal:
     """A mixture over the leaves of a failure-rate tree (share ∝ spec mass × rate ** sharpness) and the failures found.
+
+    "Failure" here is an elite episode (near_failures): steered by robustness, the near
+    failures count too, with their pull, until the level reaches 0.
 
     The tree splits the inputs (every site's grid digits) where the failure rate changes, so a
     failure mode that needs two inputs at once (the cube in its tray's front *and* the tray in
