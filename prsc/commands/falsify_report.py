@@ -178,9 +178,9 @@ def plot_sites(records: Sequence[dict], judged: Sequence[Any], proposal: Any, ma
     fig, axes = plt.subplots(1, max(len(sites), 1), figsize=(4 * max(len(sites), 1), 3.8), squeeze=False)
     for ax, site in zip(axes[0], sites):
         mass = np.asarray(masses[site], dtype=float)
-        ratio = proposal.site_density(site, mass)
         points = [(r["features"][site], v.failed) for r, v in zip(records, judged) if site in r.get("features", {})]
         dims = len(points[0][0]) if points else 1
+        ratio = proposal.site_density(site, mass, dims)
         if dims >= 2:
             k = int(round(len(mass) ** (1.0 / dims)))
             grid = ratio.reshape((k,) * dims)

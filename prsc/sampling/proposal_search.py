@@ -15,12 +15,12 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from prsc.sampling.proposal import DEFAULT_EPS, SITE_EPS, Component, Proposal, grid_index
+from prsc.sampling.proposal import DEFAULT_EPS, SITE_EPS, Component, Proposal, fine_k, grid_index
 
 ELITE_QUANTILE = 0.1  # multilevel cross-entropy: the share of the episodes so far under the next level
 MIN_ELITE = 4  # ... and at least this many episodes
 SHARPNESS = 4.0  # a near failure's pull: exp(-SHARPNESS robustness / level), e**-4 at the level, 1 at 0
-STAY = 0.5  # a near failure's replay: this share in its own cell, the rest in the neighbouring cells
+STAY = 0.5  # a near failure's replay: this share in its own fine cell, the rest in the neighbouring fine cells
 
 
 def elite_level(robustness: Sequence[float | None], quantile: float = ELITE_QUANTILE, least: int = MIN_ELITE) -> float:
@@ -54,7 +54,7 @@ class Episode(NamedTuple):
     features: dict[str, list[float]]
     weight: float
     elite: float  # how much the next proposal leans toward it (near_failures: 1 a failure, 0 not at all)
-    failed: bool  # a failure is replayed in its own cells, a near failure in its cells' neighbourhood
+    failed: bool  # a failure is replayed in its own fine cells, a near failure around them
 
 
 def cell_index(coords: list[float], cells: int) -> int:
@@ -63,27 +63,22 @@ def cell_index(coords: list[float], cells: int) -> int:
     return grid_index(np.asarray(coords, dtype=float), k)
 
 
-def _site_cells(features: dict[str, list[float]], masses: dict[str, np.ndarray]) -> dict[str, int]:
-    """The cell of each site an episode drew (sites without masses are skipped)."""
-    return {site: cell_index(coords, len(masses[site])) for site, coords in features.items() if site in masses}
+def _fine_cells(coords: list[float], mass: np.ndarray, reach: int) -> dict[int, float]:
+    """The fine cell holding `coords` and, with reach 1, those one fine step from it on any axis.
 
-
-def _neighbourhood(coords: list[float], mass: np.ndarray) -> dict[int, float]:
-    """The cell holding `coords` (weight STAY) and those one grid step from it on every axis (the rest, by spec mass)."""
-    k = _per_axis(mass, len(coords))
+    The own cell weighs 1 (reach 0) or STAY, the others share the rest."""
+    dims = len(coords)
+    k = fine_k(_per_axis(mass, dims), dims)
     centre = [min(int(x * k), k - 1) for x in coords]
-    cells = {}
-    for offset in np.ndindex(*(3,) * len(coords)):
-        digits = [c + o - 1 for c, o in zip(centre, offset)]
-        if all(0 <= d < k for d in digits):
-            flat = int(np.ravel_multi_index(digits, (k,) * len(coords)))
-            if mass[flat] > 0:
-                cells[flat] = float(mass[flat])
-    own = int(np.ravel_multi_index(centre, (k,) * len(coords)))
-    others = sum(w for c, w in cells.items() if c != own)
-    if own not in cells or not others > 0:
-        return cells
-    return {c: STAY if c == own else (1 - STAY) * w / others for c, w in cells.items()}
+    own = int(np.ravel_multi_index(centre, (k,) * dims))
+    others = []
+    for offset in np.ndindex(*(2 * reach + 1,) * dims):
+        digits = [c + o - reach for c, o in zip(centre, offset)]
+        if all(0 <= d < k for d in digits) and digits != centre:
+            others.append(int(np.ravel_multi_index(digits, (k,) * dims)))
+    if not others:
+        return {own: 1.0}
+    return {own: STAY, **{c: (1 - STAY) / len(others) for c in others}}
 
 
 def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episodes: list[Episode],
@@ -113,18 +108,11 @@ def cross_entropy_step(proposal: Proposal, masses: dict[str, np.ndarray], episod
 
 def replay_components(masses: dict[str, np.ndarray], episodes: list[Episode],
                       spec_share: float = 0.0) -> list[Component]:
-    """One component per elite episode: every site redrawn in the cell a failure drew, or for a near failure
-    in that cell's neighbourhood (one grid step each way: a step toward failing; spec_share: the spec's law)."""
-    components = []
-    for features, _, elite, failed in episodes:
-        if not elite:
-            continue
-        if failed:
-            cells = {site: {cell: 1.0} for site, cell in _site_cells(features, masses).items()}
-        else:
-            cells = {site: _neighbourhood(coords, masses[site]) for site, coords in features.items() if site in masses}
-        components.append(Component(elite, spec_share, cells))
-    return components
+    """One component per elite episode: every site redrawn in the fine cell a failure drew, or around the fine
+    cell a near failure drew (a step toward failing; spec_share: the spec's law)."""
+    return [Component(elite, spec_share, {}, {site: _fine_cells(coords, masses[site], 0 if failed else 1)
+                                              for site, coords in features.items() if site in masses})
+            for features, _, elite, failed in episodes if elite]
 
 
 @dataclass(frozen=True)
@@ -242,6 +230,6 @@ def failure_tree_step(proposal: Proposal, masses: dict[str, np.ndarray], episode
         focus = np.array([_leaf_rate(leaves, rates, _digits(features, masses, sites), overall) ** replay_focus
                           for features, _, elite, _ in episodes if elite])
         focus *= [c.share for c in kernels]
-        components += [Component(replay / (1 - replay) * total * f / focus.sum(), c.spec_share, c.cells)
+        components += [Component(replay / (1 - replay) * total * f / focus.sum(), c.spec_share, c.cells, c.fine)
                        for c, f in zip(kernels, focus)]
     return Proposal(tuple(components), DEFAULT_EPS, proposal.law)

@@ -71,7 +71,7 @@ def test_proposal_concentrates_on_the_corner_within_a_few_rounds(campaign, corne
     assert by_round[0] < 3 * p
     assert by_round[3] > 0.5 and by_round[-1] > 0.5, by_round
     mass = np.full(64, 1 / 64)  # the tray's inside is a rectangle: its 8 x 8 cells weigh the same
-    density = used[-1].site_density("position:c1", mass)
+    density = used[-1].site_density("position:c1", mass, 2)
     column, row = divmod(int(np.argmax(density)), 8)
     assert column >= 6 and row >= 5 and density.max() > 4, density  # the +x +y corner: x > 0.755, y > 0.6
 
