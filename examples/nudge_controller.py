@@ -8,9 +8,10 @@ scenes. The record's `clearance` is the closest the cube came to that (metres: t
 of its distances to the two walls by MuJoCo's mj_geomDistance, at its least), the
 robustness the task monitor computes for the same property, in a spec with a task:
 
-    fail "cornered" when c1 touches tr_1 wall_right and c1 touches tr_1 wall_front
+    c1 touches tr_1's +x wall and c1 touches tr_1's +y wall
 
-(in the task language's words for the two wall geoms; docs/tasks.md). Run it:
+(a `fail "cornered" when ...` in the task language's words for the two wall geoms:
+docs/tasks.md). Run it:
 
     prsc falsify specs/table_cube.prs --controller examples/nudge_controller.py:nudge --budget 60
 """
