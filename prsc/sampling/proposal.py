@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
@@ -39,12 +39,16 @@ SITE_EPS = 0.2  # cross-entropy: each site's share of the spec's law (every site
 RANGE_BINS = 8
 RANGE_MASS = np.full(RANGE_BINS, 1.0 / RANGE_BINS)
 GRID = {1: 8, 2: 8, 3: 4}  # cells per active axis of a position's region
+REFINE = {1: 4, 2: 4, 3: 2}  # fine cells per cell and axis: 32 per axis in 1-D and 2-D, 8 in 3-D
 EXTENT = 1e-9  # metres: an axis of the region's box narrower than this is not gridded
 
 
 @dataclass
 class Cells:
-    """A region cut into grid cells: exact samplers and spec masses (zero for an empty cell)."""
+    """A region cut into grid cells: exact samplers and spec masses (zero for an empty cell).
+
+    Each cell also splits into REFINE fine cells per axis, cut (exactly, by the same sampler)
+    only when a proposal names one: replays near a failure draw from them."""
 
     lo: np.ndarray
     hi: np.ndarray
@@ -52,15 +56,36 @@ class Cells:
     k: int  # cells per gridded axis
     samplers: list[UniformSampler | None]
     mass: np.ndarray  # each cell's share of the region's measure
-
-    def cell_of(self, p: np.ndarray) -> int:
-        """The index of the cell holding p (region coordinates)."""
-        return grid_index(self.coords(p), self.k)
+    piece_of: Callable[[Polytope], UniformSampler] | None = None  # the region cut by a box
+    measure: float = 1.0  # the region's measure (the sum of its cells')
+    dim: int = 0
+    fine: dict[int, UniformSampler | None] = field(default_factory=dict)  # fine cell -> its sampler, once cut
+    fine_masses: dict[int, float] = field(default_factory=dict)  # fine cell -> its share, once cut
 
     def coords(self, p: np.ndarray) -> np.ndarray:
         """p in [0, 1] per gridded axis of the region's box."""
         span = self.hi[self.axes] - self.lo[self.axes]
         return np.clip((p[self.axes] - self.lo[self.axes]) / span, 0.0, 1.0)
+
+    def fine_sampler(self, flat: int) -> UniformSampler | None:
+        """The exact sampler of fine cell `flat` (None: no mass), cut on first use."""
+        if flat not in self.fine:
+            self.fine[flat] = _cut_box(self.piece_of, self.lo, self.hi, self.axes, fine_k(self.k, len(self.axes)),
+                                       flat, self.dim)  # type: ignore[arg-type]
+        return self.fine[flat]
+
+    def fine_mass(self, flat: int) -> float:
+        """Fine cell `flat`'s share of the region's measure."""
+        mass = self.fine_masses.get(flat)
+        if mass is None:
+            piece = self.fine_sampler(flat)
+            mass = self.fine_masses[flat] = 0.0 if piece is None else min(1.0, piece.measure / self.measure)
+        return mass
+
+
+def fine_k(k: int, dims: int) -> int:
+    """Fine cells per axis of a grid of k cells per axis over `dims` axes."""
+    return k * REFINE[dims]
 
 
 def grid_index(u: np.ndarray, k: int) -> int:
@@ -71,6 +96,26 @@ def grid_index(u: np.ndarray, k: int) -> int:
     return index
 
 
+def _cut_box(piece_of: Callable[[Polytope], UniformSampler], lo: np.ndarray, hi: np.ndarray, axes: np.ndarray,
+             k: int, flat: int, dim: int) -> UniformSampler | None:
+    """The region cut by grid box `flat` (k per axis over `axes`), or None when that has no mass of its own."""
+    digits = np.unravel_index(flat, (k,) * len(axes))
+    a_rows, b_rows = [], []
+    for axis, digit in zip(axes, digits):
+        step = (hi[axis] - lo[axis]) / k
+        row = np.zeros(3)
+        row[axis] = 1.0
+        a_rows += [row, -row]
+        b_rows += [lo[axis] + (digit + 1) * step, -(lo[axis] + digit * step)]
+    try:
+        piece = piece_of(Polytope.from_rows(a_rows, b_rows))
+    except GeometryError:
+        return None
+    if piece is not None and (piece.dim < dim or piece.measure <= 0.0):
+        return None  # a face shared with a neighbour: no mass of its own
+    return piece
+
+
 def cut_into_cells(piece_of: Callable[[Polytope], UniformSampler], lo: np.ndarray, hi: np.ndarray,
                    measure: float, dim: int) -> Cells | None:
     """The grid cells of a region (piece_of(box): the region cut by the box), or None when it is a point."""
@@ -78,51 +123,74 @@ def cut_into_cells(piece_of: Callable[[Polytope], UniformSampler], lo: np.ndarra
     if dim == 0 or not len(axes):
         return None
     k = GRID[len(axes)]
-    samplers: list[UniformSampler | None] = []
-    mass = []
-    for flat in range(k ** len(axes)):
-        digits = np.unravel_index(flat, (k,) * len(axes))
-        a_rows, b_rows = [], []
-        for axis, digit in zip(axes, digits):
-            step = (hi[axis] - lo[axis]) / k
-            row = np.zeros(3)
-            row[axis] = 1.0
-            a_rows += [row, -row]
-            b_rows += [lo[axis] + (digit + 1) * step, -(lo[axis] + digit * step)]
-        try:
-            piece = piece_of(Polytope.from_rows(a_rows, b_rows))
-        except GeometryError:
-            piece = None
-        if piece is not None and (piece.dim < dim or piece.measure <= 0.0):
-            piece = None  # a face shared with a neighbour: no mass of its own
-        samplers.append(piece)
-        mass.append(0.0 if piece is None else piece.measure)
-    shares = np.array(mass) / max(sum(mass), measure * 1e-12)
-    return Cells(lo, hi, axes, k, samplers, shares / shares.sum())
+    samplers = [_cut_box(piece_of, lo, hi, axes, k, flat, dim) for flat in range(k ** len(axes))]
+    mass = [0.0 if piece is None else piece.measure for piece in samplers]
+    total = max(sum(mass), measure * 1e-12)
+    shares = np.array(mass) / total
+    return Cells(lo, hi, axes, k, samplers, shares / shares.sum(), piece_of, total, dim)
 
 
 @dataclass(frozen=True)
 class Component:
-    """One product law over the sites: per site, `spec_share` of the spec's law, the rest on weighted cells."""
+    """One product law over the sites: per site, `spec_share` of the spec's law, the rest on weighted cells
+    (or on weighted fine cells: `fine`)."""
 
     share: float  # the component's share of the mixture
     spec_share: float
     cells: dict[str, dict[int, float]]  # site -> {cell: weight}; a site absent keeps the spec's law
+    fine: dict[str, dict[int, float]] = field(default_factory=dict)  # site -> {fine cell: weight}, instead
 
-    def site_ratio(self, site: str, cell: int, mass: np.ndarray) -> float:
-        """This component's density over the spec's at a draw in `cell` of the site (masses `mass`)."""
-        weights = self.cells.get(site)
-        if weights is None or not mass[cell] > 0:
+    def weights(self, site: str) -> tuple[dict[int, float] | None, bool]:
+        """The site's cell weights and whether they are fine cells (None: the site keeps the spec's law)."""
+        if site in self.fine:
+            return self.fine[site], True
+        return self.cells.get(site), False
+
+    def site_ratio(self, site: str, draw: Draw) -> float:
+        """This component's density over the spec's at a site's draw."""
+        weights, fine = self.weights(site)
+        if weights is None:
             return 1.0
-        total = sum(w for c, w in weights.items() if c < len(mass) and mass[c] > 0)
+        if fine:
+            return self._ratio(weights, draw.fine, draw.fine_mass)
+        return self._ratio(weights, draw.cell, lambda c: float(draw.mass[c]) if 0 <= c < len(draw.mass) else 0.0)
+
+    def _ratio(self, weights: dict[int, float], cell: int, mass_of: Callable[[int], float]) -> float:
+        """spec_share + (1 - spec_share) (w_cell / the weights of cells of positive mass) / mass_of(cell)."""
+        mass = mass_of(cell)
+        if not mass > 0:
+            return 1.0
+        weight = weights.get(cell, 0.0)
+        if not weight > 0 and any(w > 0 and mass_of(c) > 0 for c, w in weights.items()):
+            return self.spec_share  # the component draws this site elsewhere (the usual case: no total needed)
+        total = sum(w for c, w in weights.items() if mass_of(c) > 0)
         if not total > 0:
             return 1.0
-        return self.spec_share + (1 - self.spec_share) * weights.get(cell, 0.0) / total / mass[cell]
+        return self.spec_share + (1 - self.spec_share) * weight / total / mass
+
+    def cell_ratio(self, site: str, cell: int, mass: np.ndarray, dims: int) -> float:
+        """This component's marginal density over the spec's on a (coarse) cell of the site (for plots)."""
+        weights, fine = self.weights(site)
+        if weights is not None and fine:
+            k = int(round(len(mass) ** (1.0 / max(dims, 1))))
+            refine = REFINE[max(dims, 1)]
+            coarse: dict[int, float] = {}
+            for c, w in weights.items():
+                digits = np.unravel_index(c, (k * refine,) * max(dims, 1))
+                key = int(np.ravel_multi_index([d // refine for d in digits], (k,) * max(dims, 1)))
+                coarse[key] = coarse.get(key, 0.0) + w
+            weights = coarse
+        if weights is None:
+            return 1.0
+        return self._ratio(weights, cell, lambda c: float(mass[c]) if 0 <= c < len(mass) else 0.0)
 
     def to_json(self) -> dict[str, Any]:
         """As DIR/proposal.json stores it."""
-        return {"share": self.share, "spec_share": self.spec_share,
-                "cells": {site: {str(c): w for c, w in sorted(cells.items())} for site, cells in self.cells.items()}}
+        out = {"share": self.share, "spec_share": self.spec_share,
+               "cells": {site: {str(c): w for c, w in sorted(cells.items())} for site, cells in self.cells.items()}}
+        if self.fine:
+            out["fine"] = {site: {str(c): w for c, w in sorted(cells.items())} for site, cells in self.fine.items()}
+        return out
 
 
 @dataclass(frozen=True)
@@ -155,7 +223,8 @@ class Proposal:
     def to_json(self) -> dict[str, Any]:
         """The proposal as DIR/proposal.json stores it."""
         return {"format": FORMAT, "law": self.law, "eps": self.eps, "range_bins": RANGE_BINS,
-                "grid": {str(k): v for k, v in GRID.items()}, "components": [c.to_json() for c in self.components]}
+                "grid": {str(k): v for k, v in GRID.items()}, "refine": {str(k): v for k, v in REFINE.items()},
+                "components": [c.to_json() for c in self.components]}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Proposal:
@@ -170,23 +239,25 @@ class Proposal:
             try:
                 share, spec_share = float(item["share"]), float(item["spec_share"])
                 cells = {str(site): {int(c): float(w) for c, w in ws.items()} for site, ws in item["cells"].items()}
+                fine = {str(site): {int(c): float(w) for c, w in ws.items()} for site, ws in item.get("fine", {}).items()}
             except (KeyError, TypeError, ValueError, AttributeError):
                 raise PrscError(f"proposal component {k}: expected share, spec_share and cells") from None
-            weights = [w for ws in cells.values() for w in ws.values()]
+            weights = [w for ws in (*cells.values(), *fine.values()) for w in ws.values()]
             if not (share >= 0 and 0.0 <= spec_share <= 1.0) or any(w < 0 or not np.isfinite(w) for w in weights):
                 raise PrscError(f"proposal component {k}: share, spec_share and weights must be >= 0 and finite "
                                 "(spec_share <= 1)")
-            components.append(Component(share, spec_share, cells))
+            components.append(Component(share, spec_share, cells, fine))
         if components and not sum(c.share for c in components) > 0:
             raise PrscError("a proposal's component shares must not all be 0")
         return cls(tuple(components), eps, str(data.get("law", "sequential")))
 
-    def site_density(self, site: str, mass: np.ndarray) -> np.ndarray:
-        """Per cell of a site, the proposal's marginal density over the spec's (1 where it keeps the spec's law)."""
+    def site_density(self, site: str, mass: np.ndarray, dims: int) -> np.ndarray:
+        """Per cell of a site (over `dims` axes), the proposal's marginal density over the spec's (1 where it keeps
+        the spec's law)."""
         if not self.components:
             return np.where(mass > 0, 1.0, 0.0)
         total = sum(c.share for c in self.components)
-        mixed = sum(c.share / total * np.array([c.site_ratio(site, k, mass) for k in range(len(mass))])
+        mixed = sum(c.share / total * np.array([c.cell_ratio(site, k, mass, dims) for k in range(len(mass))])
                     for c in self.components)
         return np.where(mass > 0, self.eps + (1 - self.eps) * mixed, 0.0)
 
@@ -238,11 +309,21 @@ def free_space_cells(free: UniformSampler, region: Any, obstacles: list[Polytope
 
 @dataclass
 class Draw:
-    """One site's draw in a scene: where it fell (normalised coordinates), its cell and the cells' spec masses."""
+    """One site's draw in a scene: where it fell (normalised coordinates), its cell and fine cell, and their spec masses."""
 
     coords: list[float]
     cell: int
     mass: np.ndarray
+    fine: int
+    fine_mass: Callable[[int], float]
+
+
+RANGE_FINE = RANGE_BINS * REFINE[1]
+
+
+def range_fine_mass(cell: int) -> float:
+    """A range's fine bin's share of the spec's (uniform) law."""
+    return 1.0 / RANGE_FINE if 0 <= cell < RANGE_FINE else 0.0
 
 
 class ProposalState:
@@ -267,8 +348,14 @@ class ProposalState:
         if not components:
             return 1.0
         total = sum(c.share for c in components)
-        mixed = sum(c.share / total * float(np.prod([c.site_ratio(site, d.cell, d.mass) for (site, _), d in self.draws.items()]))
-                    for c in components)
+        mixed = 0.0
+        for component in components:
+            ratio = component.share / total
+            for (site, _), draw in self.draws.items():
+                ratio *= component.site_ratio(site, draw)
+                if ratio == 0.0:  # the scene is outside this component (a replay elsewhere): no need for the rest
+                    break
+            mixed += ratio
         return 1.0 / (self.proposal.eps + (1 - self.proposal.eps) * mixed)
 
     def features(self) -> dict[str, list[float]]:
@@ -291,17 +378,18 @@ class ProposalState:
                 self.component = components[min(pick, len(components) - 1)]
         return self.component
 
-    def _pick(self, site: str, mass: np.ndarray, ctx: Any) -> int | None:
-        """The cell the scene's component draws this site from (None: the spec's law)."""
+    def _pick(self, site: str, mass: np.ndarray, fine_mass: Callable[[int], float], ctx: Any) -> tuple[int, bool] | None:
+        """The cell the scene's component draws this site from, and whether it is a fine one (None: the spec's law)."""
         component = self._choose(ctx)
-        weights = None if component is None else component.cells.get(site)
+        weights, fine = (None, False) if component is None else component.weights(site)
         if not weights:
             return None
-        cells = [c for c in weights if c < len(mass) and mass[c] > 0 and weights[c] > 0]
+        mass_of = fine_mass if fine else (lambda c: float(mass[c]) if 0 <= c < len(mass) else 0.0)
+        cells = [c for c in weights if weights[c] > 0 and mass_of(c) > 0]
         if not cells or ctx.uniform() < component.spec_share:  # type: ignore[union-attr]
             return None
         shares = np.cumsum([weights[c] for c in cells])
-        return cells[min(int(np.searchsorted(shares, ctx.uniform() * shares[-1], side="right")), len(cells) - 1)]
+        return cells[min(int(np.searchsorted(shares, ctx.uniform() * shares[-1], side="right")), len(cells) - 1)], fine
 
     def position(self, name: str, level: int, region: Any, ctx: Any) -> np.ndarray:
         """A position drawn from the proposal on the prepared region (region coordinates)."""
@@ -319,9 +407,12 @@ class ProposalState:
         if cells is None:  # a point: nothing to reweight
             return spec_draw()
         self.masses[site] = cells.mass
-        cell = self._pick(site, cells.mass, ctx)
-        p = spec_draw() if cell is None or cells.samplers[cell] is None else cells.samplers[cell].sample_one(ctx.rng)  # type: ignore[union-attr]
-        self.draws[(site, level)] = Draw([round(float(x), 6) for x in cells.coords(p)], cells.cell_of(p), cells.mass)
+        picked = self._pick(site, cells.mass, cells.fine_mass, ctx)
+        piece = None if picked is None else cells.fine_sampler(picked[0]) if picked[1] else cells.samplers[picked[0]]
+        p = spec_draw() if piece is None else piece.sample_one(ctx.rng)
+        u = cells.coords(p)
+        self.draws[(site, level)] = Draw([round(float(x), 6) for x in u], grid_index(u, cells.k), cells.mass,
+                                         grid_index(u, fine_k(cells.k, len(cells.axes))), cells.fine_mass)
         return p
 
     def spec_position(self, name: str, level: int) -> None:
@@ -332,9 +423,10 @@ class ProposalState:
         """A draw on [0, 1) for a range at `site` (spec law: uniform)."""
         site = f"range:{site}"
         self.masses[site] = RANGE_MASS
-        cell = self._pick(site, RANGE_MASS, ctx)
+        picked = self._pick(site, RANGE_MASS, range_fine_mass, ctx)
         u = ctx.uniform()
-        if cell is not None:
-            u = (cell + u) / RANGE_BINS
-        self.draws[(site, ctx.level)] = Draw([round(u, 6)], min(int(u * RANGE_BINS), RANGE_BINS - 1), RANGE_MASS)
+        if picked is not None:
+            u = (picked[0] + u) / (RANGE_FINE if picked[1] else RANGE_BINS)
+        self.draws[(site, ctx.level)] = Draw([round(u, 6)], grid_index(np.array([u]), RANGE_BINS), RANGE_MASS,
+                                             grid_index(np.array([u]), RANGE_FINE), range_fine_mass)
         return u

@@ -116,6 +116,11 @@ class Sampler:
         """Whether `results` draws many scenes at once (candidate or Gibbs rounds)."""
         return self.plan.chunked
 
+    @property
+    def proposal(self) -> Proposal | None:
+        """The proposal the next scenes are drawn from (None: a sampler built without one)."""
+        return getattr(self._engine, "proposal", None)
+
     def set_proposal(self, proposal: Proposal) -> None:
         """Draw the next scenes from `proposal` instead (a sampler built with one), keeping the compiled spec and its cut cells."""
         if not isinstance(self._engine, SequentialSampler) or self._engine.proposal is None:

@@ -10,6 +10,7 @@ import pytest
 
 from prsc.cli import main
 from prsc.ir import compile_program
+from prsc.runner.controller import load_controller, parse_target
 from prsc.sampling import compile_sampler
 from tests.sampling.scene_checks import check_scenes
 
@@ -45,6 +46,8 @@ def test_falsify_writes_every_output_and_is_deterministic_under_jobs(tmp_path, c
         assert (one / name).stat().st_size > 0
     summary = (one / "summary.txt").read_text()
     assert "sequential law (weighted)" in summary and "distinct failure clusters" in summary
+    assert "95% upper bound (one-sided)" in summary and "interval: " in summary
+    assert [r["spec_draw"] for r in records[:4]] == [True] * 4  # round 0 is the spec's own law
     assert "sequential law" in capsys.readouterr().out
     # A campaign killed after round 0 resumes to the same episodes and proposal.
     three = tmp_path / "three"
@@ -105,3 +108,25 @@ def test_proposal_errors_are_clear(tmp_path, capsys):
     assert main(["falsify", str(SPEC), "--budget", "1", "--controller", CORNER, "-o", str(other)]) == 2
     assert "did not write" in capsys.readouterr().err
     assert (other / "results.jsonl").read_text() == "a campaign of prsc run\n"
+
+
+def test_the_nudge_controller_fails_only_near_the_corner(tmp_path, capsys):
+    # examples/nudge_controller.py, the rare failure of docs/falsify.md: a cube 5 mm from both walls of its
+    # tray's +x +y corner slides into it (cornered, clearance <= 0); one 10 cm away stops short (clearance > 0).
+    import mujoco
+
+    controller = load_controller(parse_target(str(REPO / "examples" / "nudge_controller.py") + ":nudge"))
+    scene = json.loads((REPO / "tests" / "data" / "table_cube_scene.json").read_text())
+    objects = {o["name"]: o for o in scene["objects"]}
+    tray = objects["tr_1"]["position"]
+    results = {}
+    for name, offset in (("corner", 0.005), ("inside", 0.1)):
+        cube = objects["c1"]
+        cube["position"] = [tray[0] + 0.0887 - offset, tray[1] + 0.1966 - offset, cube["position"][2]]
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps(scene))
+        assert main(["compile", str(path), "--target", "mjcf", "-o", str(tmp_path / name)]) == 0
+        model = mujoco.MjModel.from_xml_path(str(next((tmp_path / name).rglob("*.xml"))))
+        results[name] = controller(scene, model, mujoco.MjData(model))
+    assert results["corner"]["outcome"] == "cornered" and results["corner"]["clearance"] <= 1e-4, results
+    assert results["inside"]["outcome"] == "success" and 0.05 < results["inside"]["clearance"] < 0.1, results

@@ -10,13 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from prsc.commands.falsify import draw_round, round_strata
+from prsc.commands.falsify import draw_round, falsify_rounds, verdicts
 from prsc.commands.falsify_report import failure_clusters, weighted_estimate
 from prsc.errors import PrscError
 from prsc.ir import compile_program
 from prsc.sampling import compile_sampler
 from prsc.sampling.proposal import Component, Proposal, Strata
-from prsc.sampling.proposal_search import cross_entropy_step, failure_tree_step
 from tests.data.corner_controller import in_corner
 from tests.sampling.scene_checks import check_scenes
 
@@ -24,20 +23,18 @@ SPEC = Path(__file__).resolve().parents[2] / "specs" / "table_cube.prs"
 SEED = 3
 
 
-def _rounds(rounds: int, size: int, step=cross_entropy_step) -> tuple[list[dict], list[Proposal], list[dict]]:
-    """Rounds of `step` against the corner controller, as prsc falsify runs them: (records, proposals used, scenes)."""
-    proposal, records, used, scenes, masses = Proposal(), [], [], [], {}
-    for number in range(rounds):
-        sampler = compile_sampler(str(SPEC), proposal=replace(proposal, strata=round_strata(SEED, number, number * size, size)))
-        drawn, info, seen = draw_round(sampler, SEED, number * size, size)
-        masses.update(seen)
-        used.append(proposal)
-        scenes += drawn
-        for scene, extra in zip(drawn, info):
-            records.append({"index": scene["index"], "round": number, "weight": extra["weight"],
-                            "features": extra["features"], "outcome": "corner" if in_corner(scene) else "success"})
-        episodes = [(r["features"], r["weight"], r["outcome"] != "success") for r in records]
-        proposal = step(proposal, masses, episodes)
+def _rounds(rounds: int, size: int, method: str) -> tuple[list[dict], list[Proposal], list[dict]]:
+    """Rounds of `method` against the corner controller, as prsc falsify runs them: (records, proposals used, scenes)."""
+    sampler = compile_sampler(str(SPEC), law="sequential", proposal=Proposal())
+    used, scenes = [], []
+
+    def corner_round(number: int, drawn: list[dict], extras: list[dict]) -> list[dict]:
+        used.append(sampler.proposal)
+        scenes.extend(drawn)
+        return [{"index": s["index"], "outcome": "corner" if in_corner(s) else "success", **e}
+                for s, e in zip(drawn, extras)]
+
+    records, _, _ = falsify_rounds(sampler, SEED, rounds * size, rounds, method, "label", None, corner_round)
     return records, used, scenes
 
 
@@ -50,7 +47,7 @@ def corner_probability() -> tuple[float, float]:
     return p, math.sqrt(p * (1 - p) / len(hits))
 
 
-@pytest.fixture(scope="module", params=[cross_entropy_step, failure_tree_step], ids=["cross-entropy", "failure-tree"])
+@pytest.fixture(scope="module", params=["cross-entropy", "failure-tree"])
 def campaign(request):
     return _rounds(6, 100, request.param)
 
@@ -74,7 +71,7 @@ def test_proposal_concentrates_on_the_corner_within_a_few_rounds(campaign, corne
     assert by_round[0] < 3 * p
     assert by_round[3] > 0.5 and by_round[-1] > 0.5, by_round
     mass = np.full(64, 1 / 64)  # the tray's inside is a rectangle: its 8 x 8 cells weigh the same
-    density = used[-1].site_density("position:c1", mass)
+    density = used[-1].site_density("position:c1", mass, 2)
     column, row = divmod(int(np.argmax(density)), 8)
     assert column >= 6 and row >= 5 and density.max() > 4, density  # the +x +y corner: x > 0.755, y > 0.6
 
@@ -90,7 +87,7 @@ def test_every_proposed_scene_satisfies_the_spec(campaign):
 def test_weighted_estimate_converges_to_the_corner_probability(campaign, corner_probability):
     records, _, _ = campaign
     p, se = corner_probability
-    est = weighted_estimate(records)
+    est = weighted_estimate(records, verdicts(records, None))
     tolerance = 3 * math.hypot(se, (est.high - est.low) / (2 * 1.96))
     assert abs(est.value - p) < tolerance, (est, p)
     assert est.low <= p <= est.high or abs(est.value - p) < tolerance
@@ -118,7 +115,7 @@ def test_failure_clusters_count_near_duplicates_once():
     records = [{**base, "index": 0, "features": {"a": [0.1, 0.1]}}, {**base, "index": 1, "features": {"a": [0.15, 0.12]}},
                {**base, "index": 2, "features": {"a": [0.9, 0.9]}}, {**base, "index": 3, "outcome": "success",
                                                                      "features": {"a": [0.5, 0.5]}}]
-    clusters = failure_clusters(records)
+    clusters = failure_clusters(records, verdicts(records, None))
     assert [c["episodes"] for c in clusters] == [[0, 1], [2]]
 
 
