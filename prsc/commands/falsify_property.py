@@ -38,7 +38,7 @@ def episode_verdict(record: dict, prop: str | None) -> Verdict:
     task = record.get("task")
     if task is None:
         if prop is not None:
-            raise PrscError(f"--property {prop}: the spec states no task (LANGUAGE.md §8), so episodes have only "
+            raise PrscError(f"--property {prop}: the spec states no task (docs/tasks.md), so episodes have only "
                             "the controller's outcome; drop --property to count every outcome but success")
         return Verdict(record["outcome"] != "success", None, record["outcome"], False)
     outcome, robustness = task["outcome"], task.get("robustness") or {}
