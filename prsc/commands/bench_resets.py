@@ -2,7 +2,8 @@
 shared MuJoCo model (`scenario.apply`) against a model compiled per scene
 (`prsc.mujoco_model`), side by side in one process on one core (docs/learning.md).
 
-Rows: drawing the scene alone; `apply` alone and a compile alone (scenes drawn
+Rows: drawing the scene alone, through `scenario.drawer` as `SceneEnv.reset` does (batched
+where the sampler batches) and one at a time through `scenario.scene`; `apply` alone and a compile alone (scenes drawn
 beforehand); draw + apply (an RL reset) and draw + compile (the path without `apply`),
 from those rates; and a 4-environment
 `gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed, with
@@ -17,6 +18,7 @@ import time
 from typing import Any, Callable
 
 VECTOR_ENVS = 4
+DRAW_AHEAD = 16  # SceneEnv's default draw_ahead: the bench draws scenes as a reset does
 
 
 def _rate(count: int, work: Callable[[int], Any]) -> float:
@@ -39,11 +41,16 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     scenes = [scenario.scene(seed, k) for k in range(1, n + 1)]
     scenario.apply(scenes[-1], model, data)  # warm-up: imports and caches are set-up, not per-reset cost
     compiled = max(1, n // 10)  # compiling is ~100x slower: fewer of them measure it as well
-    drawn = _rate(n, lambda k: scenario.scene(seed, n + 1 + k))
+    # A reset draws through `scenario.drawer` (batched where the sampler batches), as SceneEnv.reset
+    # does; one scene at a time through `scenario.scene` is kept as a row to compare against.
+    draw = scenario.drawer(seed + 1, DRAW_AHEAD)
+    drawn = _rate(n, lambda k: draw(k))
+    drawn_singly = _rate(max(1, n // 4), lambda k: scenario.scene(seed, n + 1 + k))
     applied = _rate(n, lambda k: scenario.apply(scenes[k], model, data))
     compiled_rate = _rate(compiled, lambda k: mujoco_model(scenes[k]))
     rates = {
-        "draw a scene": drawn,
+        f"draw a scene (drawer, {DRAW_AHEAD} ahead)": drawn,
+        "draw a scene (one at a time)": drawn_singly,
         "apply (scene drawn)": applied,
         "compile (scene drawn)": compiled_rate,
         # Drawing then writing: the two costs add up, as in a reset.
