@@ -59,10 +59,12 @@ def atomic_write(path: Path | str, data: bytes | str) -> None:
 
 
 @contextlib.contextmanager
-def atomic_path(path: Path | str) -> Iterator[Path]:
-    """A temporary path (with `path`'s file type) that a library writes and that then replaces `path`."""
+def atomic_path(path: Path | str, folder: Path | str | None = None) -> Iterator[Path]:
+    """A temporary path (with `path`'s file type) that a library writes and that then replaces `path`;
+    made in `folder` (on the same file system) instead of beside `path` when given."""
     path = Path(path)
-    handle, tmp = tempfile.mkstemp(dir=path.absolute().parent, prefix=f".{path.name}.prsc-", suffix=f".tmp{path.suffix}")
+    where = path.absolute().parent if folder is None else Path(folder)
+    handle, tmp = tempfile.mkstemp(dir=where, prefix=f".{path.name}.prsc-", suffix=f".tmp{path.suffix}")
     try:
         _lock(handle)
         yield Path(tmp)

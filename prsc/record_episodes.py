@@ -106,7 +106,7 @@ class RecordEpisodes(gymnasium.Wrapper):
             return
         reward, _, success = frames.values[-1]
         frames.values[-1] = (reward, True, success)  # the episode ends at its last frame
-        from prsc.runner.demo_dataset import encode_episode
+        from prsc.runner.episode_encoding import encode_episode
 
         scene = recorder.scene
         outcome = "success" if any(v[2] for v in frames.values) else "ended"

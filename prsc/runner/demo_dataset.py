@@ -11,67 +11,28 @@ folder again drops what a hard kill left beyond the last finished commit, and re
 from __future__ import annotations
 
 import fcntl
-import hashlib
 import json
 import os
 import re
 import shutil
 import signal
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from prsc.backends.names import with_body_names
 from prsc.errors import PrscError
+from prsc.files import atomic_path
 
 from prsc.runner import lerobot_format as lerobot
 from prsc.runner import robomimic_format as robomimic
-from prsc.runner.demo_frames import EpisodeFrames
-from prsc.runner.episode_records import RecordSettings
+from prsc.runner.episode_encoding import ASSET_REFERENCE, MODELS, RecordedEpisode
 
 FORMATS = ("lerobot", "robomimic")
 KEEP = ("all", "success")
 STATE_FILE = "prsc-dataset.json"
 LOCK_FILE = ".prsc-dataset-lock"
 SCRATCH = ".prsc-scratch"  # files being written, outside the folders a reader globs
-MODELS = "models"
-_ASSET_REFERENCE = re.compile(r'file="\.\./assets/([^"]+)"')
-
-
-@dataclass
-class RecordedEpisode:
-    """One episode encoded for the dataset (picklable: it crosses process lines and Ray)."""
-
-    scene_index: int
-    scene: dict
-    seed: int
-    result: dict  # the results.jsonl line without its wall-clock time
-    task: str
-    names: dict[str, list[str]]  # state, action, object names
-    state_size: int
-    cameras: list[dict]  # name, width, height
-    columns: dict[str, np.ndarray]
-    model_name: str  # models/<sha>.xml or .mjb
-    model_text: str | None = None  # an MJCF file's text, asset paths relative to models/
-    model_source: str | None = None  # that file, whose ../assets/ the driver copies
-    model_binary: bytes | None = None  # an in-memory model (prsc.RecordEpisodes)
-    videos: dict[str, bytes] = field(default_factory=dict)  # lerobot: camera -> mp4
-    image_stats: dict[str, dict] = field(default_factory=dict)
-    hdf5: bytes | None = None  # robomimic: the episode's file
-
-    def drop_payload(self) -> None:
-        """Free the frames and encoded files (once committed)."""
-        self.columns = {"next.done": self.columns["next.done"], "next.success": self.columns["next.success"]}
-        self.videos, self.hdf5, self.model_binary, self.model_text = {}, None, None, None
-
-    @property
-    def success(self) -> bool:
-        """The task succeeded (its `next.success`), or the controller said `success`."""
-        return bool(np.any(self.columns["next.success"])) or self.result.get("outcome") == "success"
-
-    def __len__(self) -> int:
-        return len(self.columns["next.done"])
 
 
 def require_libraries() -> None:
@@ -86,64 +47,17 @@ def require_libraries() -> None:
         raise PrscError(f"recording a dataset needs {', '.join(missing)}: pip install 'prsc[datasets]'")
 
 
-def task_text(scene: dict) -> str:
-    """The episode's task: the spec's `param task`, else the spec's name."""
-    task = (scene.get("params") or {}).get("task")
-    if isinstance(task, str) and task.strip():
-        return task.strip()
-    return Path(str(scene.get("spec") or "scene")).stem
-
-
-def model_file_text(mjcf_text: str) -> tuple[str, str]:
-    """(text, models/<sha>.xml) of a compiled MJCF as stored: its ../assets/ become assets/ beside it."""
-    text = _ASSET_REFERENCE.sub(lambda m: f'file="assets/{m.group(1)}"', mjcf_text)
-    return text, f"{MODELS}/{hashlib.sha256(text.encode()).hexdigest()[:20]}.xml"
-
-
-def encode_episode(frames: EpisodeFrames, settings: RecordSettings, scene: dict, result: dict, *,
-                   mjcf_path: str | None = None, model_binary: bytes | None = None) -> RecordedEpisode:
-    """The episode's frames as the dataset stores them (videos or HDF5 encoded here, in the worker)."""
-    layout = frames.layout
-    columns = frames.columns()
-    names = {"state": list(layout.state_names), "action": list(layout.action_names), "object": list(layout.object_names)}
-    if mjcf_path is not None:
-        text, model_name = model_file_text(Path(mjcf_path).read_text(encoding="utf-8"))
-    else:
-        text, model_name = None, f"{MODELS}/{hashlib.sha256(model_binary).hexdigest()[:20]}.mjb"
-    episode = RecordedEpisode(
-        scene_index=int(scene.get("index", 0)), scene=scene, seed=int(scene.get("seed", 0)),
-        result={k: v for k, v in result.items() if k != "wall_seconds"}, task=settings.task or task_text(scene),
-        names=names, state_size=layout.state_size,
-        cameras=[{"name": c.name, "width": c.width, "height": c.height} for c in layout.cameras if settings.images],
-        columns=columns, model_name=model_name, model_text=text, model_source=mjcf_path, model_binary=model_binary)
-    images = {c.name: frames.image_stack(c.name) for c in layout.cameras if frames.images.get(c.name)}
-    if settings.format == "lerobot":
-        for camera, stack in images.items():
-            episode.videos[camera] = lerobot.encode_video(stack, settings.fps, settings.lossless)
-            episode.image_stats[camera] = lerobot.feature_stats(stack, is_image=True)
-    else:
-        attrs = {"model_file": text if text is not None else "", "prsc_model_path": model_name,
-                 "prsc_scene": json.dumps(scene), "prsc_seed": episode.seed, "prsc_scene_index": episode.scene_index,
-                 "prsc_result": json.dumps(episode.result), "prsc_task": episode.task}
-        episode.hdf5 = robomimic.episode_file(columns, images, names, attrs)
-    return episode
-
-
 def _put(root: Path, path: Path, data: bytes | str | None = None, writer=None) -> None:
-    """Write `path` whole (bytes, or `writer(temporary path)`) through a scratch file and a rename."""
+    """Write `path` whole (bytes, or `writer(temporary path)`) through a temporary in the scratch folder,
+    outside the folders a reader globs, renamed into place (prsc.files.atomic_path)."""
     scratch = root / SCRATCH
     scratch.mkdir(exist_ok=True)
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = scratch / f"{os.getpid()}-{path.name}"
-    try:
+    with atomic_path(path, folder=scratch) as temporary:
         if writer is not None:
             writer(temporary)
         else:
             temporary.write_bytes(data.encode() if isinstance(data, str) else data)
-        os.replace(temporary, path)
-    except BaseException:
-        temporary.unlink(missing_ok=True)
-        raise
 
 
 class _Deferred:
@@ -286,7 +200,7 @@ class DemoDataset:
             _put(self.root, path, episode.model_binary)
             return
         source_assets = Path(episode.model_source).resolve().parent.parent / "assets"
-        for rel in _ASSET_REFERENCE.findall(Path(episode.model_source).read_text(encoding="utf-8")):
+        for rel in ASSET_REFERENCE.findall(Path(episode.model_source).read_text(encoding="utf-8")):
             target = self.root / MODELS / "assets" / rel
             if not target.exists():
                 _put(self.root, target, writer=lambda temporary, rel=rel: shutil.copyfile(source_assets / rel, temporary))

@@ -45,7 +45,7 @@ def run_task(config: WorkerConfig, task: EpisodeTask) -> tuple:
 
 def _recorded(settings: Any, task: EpisodeTask) -> tuple[Any, Any]:
     """(result, its RecordedEpisode) of an episode recorded frame by frame from the step hook."""
-    from prsc.runner.demo_dataset import encode_episode
+    from prsc.runner.episode_encoding import encode_episode
     from prsc.runner.demo_frames import DemoRecorder
     from prsc.runner.harness import run_episode
 

@@ -29,7 +29,7 @@ from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchPlan, batch_plan
 from prsc.sampling.candidate_plan import CandidatePlan, candidate_plan
 from prsc.sampling.candidates import CandidateSampler
-from prsc.sampling.group_gibbs import GroupObject, group_plan, group_sweeps
+from prsc.sampling.group_members import GroupObject, group_plan, group_sweeps
 from prsc.sampling.runtime import ObjectRuntime
 
 BATCHED = "batched"
