@@ -68,7 +68,8 @@ def write_index(path, demos: list[tuple[str, int, bool]], env_args: dict) -> Non
     `hdf5_filter_key`) naming the demos whose task succeeded."""
     import h5py
 
-    with h5py.File(path, "w", libver="latest") as f:
+    # locking=False: the temporary is already locked by prsc.files.atomic_path, whose lock HDF5 would meet
+    with h5py.File(path, "w", libver="latest", locking=False) as f:
         data = f.create_group("data")
         for k, (file, _, _) in enumerate(demos):
             data[f"demo_{k}"] = h5py.ExternalLink(file, DEMO_GROUP)

@@ -15,7 +15,8 @@ from typing import NamedTuple, Sequence
 
 import numpy as np
 
-from prsc.sampling.proposal import DEFAULT_EPS, SITE_EPS, Component, Proposal, fine_k, grid_index
+from prsc.sampling.proposal import DEFAULT_EPS, SITE_EPS, Component, Proposal
+from prsc.sampling.proposal_cells import fine_k, grid_index
 
 ELITE_QUANTILE = 0.1  # multilevel cross-entropy: the share of the episodes so far under the next level
 MIN_ELITE = 4  # ... and at least this many episodes
