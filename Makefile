@@ -7,7 +7,7 @@ STAMP := $(VENV)/.installed
 export MUJOCO_GL ?= egl
 export PYOPENGL_PLATFORM ?= egl
 
-.PHONY: setup test test-cluster demo docs datasets bench casestudy casestudy-check clean lerobot-check
+.PHONY: setup test test-slow test-cluster demo docs datasets bench casestudy casestudy-check clean lerobot-check
 
 setup: $(STAMP)
 
@@ -20,7 +20,11 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 test: $(STAMP)
-	$(PY) -m pytest -q -n 2 --dist loadfile -m "not cluster"
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "not cluster and not slow"
+
+# The slowest tests (tests/conftest.py, SLOW): kept out of `make test`'s 4 minutes; CI runs them.
+test-slow: $(STAMP)
+	$(PY) -m pytest -q -n 2 --dist loadfile -m slow
 
 # A local multi-node Ray cluster losing a node (tests/runner/test_ray_nodes.py): about a minute of
 # waiting on nodes, kept out of `make test`'s 4 minutes; CI runs it after the suite.
