@@ -212,7 +212,9 @@ class Sampler:
             if index not in drawn:
                 drawn.clear()
                 # Candidate rounds and sweeps take 16 ahead: a worker asked for a few scenes draws few more.
-                chunk = range(index, index + (ahead if path == BATCHED else min(ahead, 16)))
+                # Batches and Gibbs rounds take all `ahead`: their cost is numpy calls per round, not scenes.
+                wide = path in (BATCHED, GIBBS_ROUNDS)
+                chunk = range(index, index + (ahead if wide else min(ahead, 16)))
                 # They hand over results, each made JSON (or its error raised) only when asked for: a scene
                 # that cannot be written does not take the scenes before it in the chunk with it.
                 if path == BATCHED:
