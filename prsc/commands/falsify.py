@@ -27,7 +27,7 @@ from typing import Any, Callable, Sequence
 from prsc.pipeline.executors import add_executor_arguments
 from prsc.pipeline.seed_jobs import check_seed_and_jobs
 from prsc.pipeline.tables import print_table
-from prsc.commands.falsify_property import STEERS, Verdict, episode_verdict
+from prsc.commands.falsify_property import STEERS, Verdict, check_property, episode_verdict
 from prsc.constraints.polytope_ir import COLLISION
 from prsc.errors import PrscError
 
@@ -227,8 +227,10 @@ def run(args: argparse.Namespace) -> int:
 
     # An empty proposal draws exactly as the spec's (sequential) law does, recording where each
     # draw fell (for the clusters). Later rounds swap the proposal into the same compiled sampler.
-    sampler = compile_sampler(str(source), args.include, law="sequential", proposal=Proposal())
     try:
+        sampler = compile_sampler(str(source), args.include, law="sequential", proposal=Proposal())
+        task = sampler.program.task
+        check_property(args.property, tuple(f.label for f in task.failures) if task else None)  # before any episode
         _, proposal, masses = falsify_rounds(sampler, args.seed, args.budget, args.rounds, args.method, args.steer,
                                              args.property, run_round)
     except Exception:

@@ -33,6 +33,18 @@ class Verdict:
     from_task: bool  # judged on the task monitor's record (else on the controller's outcome)
 
 
+def check_property(prop: str | None, failure_labels: tuple[str, ...] | None) -> None:
+    """Refuse `--property` before any episode runs: a spec without a task (labels None), or a label it lacks."""
+    if prop is None or (failure_labels is not None and (prop == GOAL or prop in failure_labels)):
+        return
+    if failure_labels is None:
+        raise PrscError(f"--property {prop}: the spec states no task (docs/tasks.md), so episodes have only "
+                        "the controller's outcome; drop --property to count every outcome but success")
+    labels = ", ".join(sorted(failure_labels)) or "none"
+    raise PrscError(f"--property {prop}: the spec's task has no `fail \"{prop}\" when ...` "
+                    f"(its failure labels: {labels}; or --property {GOAL})")
+
+
 def episode_verdict(record: dict, prop: str | None) -> Verdict:
     """The episode against `prop`: None (any task outcome but success), "goal", or a fail LABEL of the spec's task."""
     task = record.get("task")

@@ -130,3 +130,20 @@ def test_the_nudge_controller_fails_only_near_the_corner(tmp_path, capsys):
         results[name] = controller(scene, model, mujoco.MjData(model))
     assert results["corner"]["outcome"] == "cornered" and results["corner"]["clearance"] <= 1e-4, results
     assert results["inside"]["outcome"] == "success" and 0.05 < results["inside"]["clearance"] < 0.1, results
+
+
+@pytest.mark.parametrize("prop, said", [("arm in tray", "its failure labels: arm on table, cube dropped"),
+                                        ("anything", "its failure labels")])
+def test_a_property_the_task_lacks_is_refused_before_any_episode(tmp_path, capsys, prop, said):
+    out = tmp_path / "falsify"
+    code = main(["falsify", str(SPEC), "--budget", "4",
+                 "--rounds", "1", "--property", prop, "-o", str(out)])
+    assert code == 2 and said in capsys.readouterr().err
+    assert not out.exists()  # nothing was run, nothing is left
+
+
+def test_a_property_without_a_task_is_refused_before_any_episode(tmp_path, capsys):
+    out = tmp_path / "falsify"
+    naive = REPO / "specs" / "table_cube_naive.prs"  # the same scene, no task
+    assert main(["falsify", str(naive), "--budget", "4", "--rounds", "1", "--property", "goal", "-o", str(out)]) == 2
+    assert "states no task" in capsys.readouterr().err and not out.exists()
