@@ -8,6 +8,7 @@ faults (the file does not load, no GL context) raise InfrastructureError instead
 
 from __future__ import annotations
 
+import contextlib
 import json
 import signal
 import threading
@@ -146,10 +147,12 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
     if monitor is not None and monitor_ready is not None:
         monitor_ready(monitor)
     watchers = [PeriodicCallback(CONTROL_PERIOD, watch_task)] if monitor is not None else []
-    hook = StepHook(model, data, [*watchers, *step_callbacks])
+    callbacks = [*watchers, *step_callbacks]
+    # no control callback at all when nothing watches: every mj_step of the process would pay for it
+    hook = StepHook(model, data, callbacks) if callbacks else None
     finished = True
     try:
-        with _Watchdog(data, limit, frame_every)(model), hook:
+        with _Watchdog(data, limit, frame_every)(model), hook or contextlib.nullcontext():
             returned = controller(with_body_names(task.scene), model, data)
         outcome, reason, extra = _interpret(returned)
     except SimulationTimeLimit:
@@ -163,7 +166,7 @@ def run_episode(task: EpisodeTask, observer: Observer | None = None, frame_every
         outcome, reason, extra = "error", f"{type(error).__name__}: {message[0] if message else ''}".rstrip(": "), {}
     finally:
         _observer = None
-    if hook.error is not None and not isinstance(hook.error, SimulationTimeLimit):  # the limit's tick may land in a callback
+    if hook is not None and hook.error is not None and not isinstance(hook.error, SimulationTimeLimit):  # the limit's tick may land in a callback
         raise InfrastructureError(f"a step callback failed: {type(hook.error).__name__}: {hook.error}")
     if outcome != "timeout" and data.time > limit:
         outcome, reason, extra = "timeout", f"ran {data.time:g} simulated seconds, past the limit of {limit:g}", {}
