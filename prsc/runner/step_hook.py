@@ -63,11 +63,15 @@ class StepHook:
         self.pending: BaseException | None = None
         self._address = data._address
         self._due = [float(data.time)] * len(self.callbacks)
+        self._next_due = min(self._due, default=float("inf"))  # the earliest of them
         self._raw = _RAW_CALLBACK(self._on_control)  # kept alive while installed
         self._previous = None
 
     def _on_control(self, _model_address: int | None, data_address: int | None) -> None:
-        if data_address == self._address and self.pending is None:
+        # Called at every step of every model in the process: the common cases return first.
+        if data_address != self._address or self.data.time + _TIME_SLACK < self._next_due:
+            return
+        if self.pending is None:
             try:
                 self.run_due()
             except BaseException as error:  # noqa: BLE001 - nothing may unwind through MuJoCo's C frames
@@ -91,6 +95,7 @@ class StepHook:
                 # the next boundary after now: a controller that jumps time skips the missed ones
                 missed = int((now + _TIME_SLACK - self._due[k]) // entry.period)
                 self._due[k] += (missed + 1) * entry.period
+        self._next_due = min(self._due, default=float("inf"))
 
     def stop(self, error: BaseException) -> None:
         """End the episode: the episode's next `mj_step` raises `error` (the first one asked for wins)."""

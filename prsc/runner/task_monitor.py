@@ -17,6 +17,7 @@ from prsc.task.world import DISTANCE_CAP, Pose, WorldState
 
 __all__ = ["TaskMonitor", "TaskStatus", "CONTROL_PERIOD"]
 
+_geom_distance = mujoco.mj_geomDistance
 CONTROL_PERIOD = 0.02  # s of simulated time between two evaluations of the task (50 Hz)
 
 
@@ -38,7 +39,7 @@ def _is_below(model: mujoco.MjModel, body: int, root: int) -> bool:
 
 
 class MjWorld:
-    """Object names -> MuJoCo bodies and geoms of one model; builds WorldStates from its data."""
+    """Object names -> MuJoCo bodies and geoms of one model; reads poses and geom distances from its data."""
 
     def __init__(self, scene: dict, model: mujoco.MjModel, task: Task):
         self.model = model
@@ -60,35 +61,37 @@ class MjWorld:
                 link = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{obj['body']}/{finger}")
                 if link >= 0:
                     self.geoms[f"{obj['name']}/{finger}"] = np.flatnonzero(collides & (model.geom_bodyid == link))
-        self._fromto = np.zeros(6)
-        self._velocity = np.zeros(6)
-        self._pair_geoms: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
-        self._distances_at: tuple | None = None
-        self._distances: dict[tuple[str, str], float] = {}
-        self._centres: np.ndarray | None = None
-        self._halves: np.ndarray | None = None
+        self._fixed_bodies = frozenset(b for b in self.body.values()
+                                       if model.body_weldid[b] == 0 and model.body_mocapid[b] < 0)
+        self._fixed_poses: dict[str, tuple[int, Pose]] = {}
         welded = model.body_weldid[model.geom_bodyid] == 0
         self._moving = ~(welded & (model.body_mocapid[model.geom_bodyid] < 0))
-        self._moving_ids = np.flatnonzero(self._moving)
-        self._nearest: dict[tuple[str, str], tuple[int, int]] = {}  # each pair's nearest geoms at the last step
+        self._fromto = np.zeros(6)
+        self._pair_geoms: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+        self._nearest: dict[tuple[str, str], tuple[int, int]] = {}  # each pair's nearest geoms at the last state
         self.prepare(())
 
-    def _state_key(self, data: mujoco.MjData) -> tuple:
-        """What identifies a state (a state set and forwarded without stepping is a new one)."""
-        return (data._address, data.time, data.qpos.tobytes(), data.mocap_pos.tobytes(), data.mocap_quat.tobytes())
+    def prepare(self, pairs) -> None:
+        """The pairs the task will ask for at every state: one broad phase places their geoms' boxes together."""
+        self._batch = list(dict.fromkeys(pairs))
+        parts = [self._pairs_of(a, b) for a, b in self._batch]
+        self._batch_a = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, int)
+        self._batch_b = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, int)
+        bounds = np.cumsum([0] + [len(p[0]) for p in parts]).tolist()
+        self._batch_rows = {pair: (first, last) for pair, first, last in zip(self._batch, bounds[:-1], bounds[1:])}
+        self._batch_boxes = None  # placed at the first state
 
-    def _geom_centres(self, data: mujoco.MjData) -> np.ndarray:
-        """Centres of the geoms' broad-phase boxes: a fixed geom's world-aligned box (MuJoCo's own geom_aabb,
-        placed once), a moving geom's cube around its bounding sphere (centred on the geom)."""
-        if self._centres is None:
-            rotations = data.geom_xmat.reshape(-1, 3, 3)
-            aabb = self.model.geom_aabb
-            self._centres = data.geom_xpos + np.einsum("nij,nj->ni", rotations, aabb[:, :3])
-            self._halves = np.where(self._moving[:, None], self.model.geom_rbound[:, None],
-                                    np.einsum("nij,nj->ni", np.abs(rotations), aabb[:, 3:]))
-            self.prepare(self._batch)  # the pairs' half sizes, now known
-        self._centres[self._moving_ids] = data.geom_xpos[self._moving_ids]
-        return self._centres
+    def _place_batch(self, data: mujoco.MjData) -> None:
+        """The batch's box offsets as one linear map of the geoms' positions (a moving geom's box is
+        centred on it, a fixed one's is placed now), and their summed half sizes."""
+        centres, halves = self._boxes(data)
+        rows = np.arange(len(self._batch_a))
+        select = np.zeros((len(rows), self.model.ngeom))
+        select[rows, self._batch_a] += self._moving[self._batch_a]
+        select[rows, self._batch_b] -= self._moving[self._batch_b]
+        fixed = (np.where(self._moving[self._batch_a, None], 0.0, centres[self._batch_a])
+                 - np.where(self._moving[self._batch_b, None], 0.0, centres[self._batch_b]))
+        self._batch_boxes = (select, fixed, halves[self._batch_a] + halves[self._batch_b])
 
     def _pairs_of(self, a: str, b: str) -> tuple[np.ndarray, np.ndarray]:
         """Every (geom of a, geom of b), flattened."""
@@ -98,73 +101,102 @@ class MjWorld:
             found = self._pair_geoms[(a, b)] = (np.repeat(ga, len(gb)), np.tile(gb, len(ga)))
         return found
 
-    def prepare(self, pairs) -> None:
-        """Distances the task will ask for at every step, computed together (one broad phase per step)."""
-        self._batch = list(dict.fromkeys(pairs))
-        parts = [self._pairs_of(a, b) for a, b in self._batch]
-        self._batch_a = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, int)
-        self._batch_b = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, int)
-        self._batch_halves = None if self._halves is None else self._halves[self._batch_a] + self._halves[self._batch_b]
-        bounds = np.cumsum([0] + [len(p[0]) for p in parts])
-        self._batch_slices = list(zip(bounds[:-1].tolist(), bounds[1:].tolist()))
+    def _boxes(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """Every geom's world-aligned box (centres, half sizes): a fixed geom's around its own box
+        (MuJoCo's geom_aabb), a moving geom's a cube around its bounding sphere, centred on it."""
+        rotations = data.geom_xmat.reshape(-1, 3, 3)
+        local = self.model.geom_aabb
+        centres = np.where(self._moving[:, None], data.geom_xpos,
+                           data.geom_xpos + np.einsum("nij,nj->ni", rotations, local[:, :3]))
+        halves = np.where(self._moving[:, None], self.model.geom_rbound[:, None],
+                          np.einsum("nij,nj->ni", np.abs(rotations), local[:, 3:]))
+        return centres, halves
+
+    def batch_lower_bounds(self, data: mujoco.MjData) -> np.ndarray:
+        """Squared broad-phase bounds of every batch row (geom pair) in `data`'s state."""
+        if self._batch_boxes is None:
+            self._place_batch(data)
+        select, fixed, halves = self._batch_boxes
+        gaps = np.abs(select @ data.geom_xpos + fixed) - halves
+        np.maximum(gaps, 0.0, out=gaps)
+        return np.einsum("nd,nd->n", gaps, gaps)
+
+    def lower_bounds(self, data: mujoco.MjData, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
+        """Squared broad-phase bounds of geom pairs (ia[k], ib[k]) outside the batch."""
+        centres, halves = self._boxes(data)
+        gaps = np.maximum(np.abs(centres[ia] - centres[ib]) - halves[ia] - halves[ib], 0.0)
+        return np.einsum("nd,nd->n", gaps, gaps)
 
     def pose(self, data: mujoco.MjData, name: str, moving: bool = True) -> Pose:
         """The object's box centre and rotation now (the body frame is the box's, prsc/backends), views into
         `data` valid until it steps; its velocities when `moving` (else zeros: the task reads none)."""
         b = self.body[name]
+        if b in self._fixed_bodies:  # welded to the world: placed once
+            found = self._fixed_poses.get(name)
+            if found is None or found[0] != data._address:
+                found = self._fixed_poses[name] = (data._address, Pose(data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy(),
+                                                                     _STILL, _STILL))
+            return found[1]
         if not moving:
             return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), _STILL, _STILL)
         velocity = np.zeros(6)
         mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_BODY, b, velocity, 0)
         return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), velocity[3:], velocity[:3])
 
-    def distance(self, data: mujoco.MjData, a: str, b: str) -> float:
-        """The least signed distance between the geoms of a and b (capped at DISTANCE_CAP)."""
-        key = self._state_key(data)
-        if self._distances_at != key:
-            self._distances_at, self._distances = key, {}
-            centres = self._geom_centres(data)
-            if self._batch:
-                self._distances = self._nearest_of(data, self._batch, self._batch_slices, self._batch_a,
-                                                   self._batch_b, self._batch_halves, centres)
-        found = self._distances.get((a, b))
-        if found is None:
-            ia, ib = self._pairs_of(a, b)
-            found = self._distances[(a, b)] = self._nearest_of(
-                data, [(a, b)], [(0, len(ia))], ia, ib, self._halves[ia] + self._halves[ib], self._centres)[(a, b)]
-        return found
+    def distances(self, data: mujoco.MjData) -> StateDistances:
+        """The distances between geoms of `data`'s present state, computed when asked."""
+        return StateDistances(self, data)
 
-    def _nearest_of(self, data, pairs, slices, ia, ib, halves, centres) -> dict[tuple[str, str], float]:
-        """Broad phase (the distance between two geoms' world-aligned boxes bounds theirs below) over every
-        geom pair at once, then MuJoCo's own mj_geomDistance, from the pair nearest at the last step."""
-        if not len(ia):
-            return {pair: DISTANCE_CAP for pair in pairs}
-        gaps = np.maximum(np.abs(centres[ia] - centres[ib]) - halves, 0.0)
-        lower = np.sqrt(np.einsum("nd,nd->n", gaps, gaps))
-        # Each pair's search starts from its geoms nearest at the last step (steps are short); only geom
-        # pairs whose broad-phase bound is under that distance are computed.
-        bests, nearests = [], []
-        for pair in pairs:
-            nearest = self._nearest.get(pair)
-            nearests.append(nearest)
-            bests.append(DISTANCE_CAP if nearest is None else min(DISTANCE_CAP, mujoco.mj_geomDistance(
-                self.model, data, nearest[0], nearest[1], DISTANCE_CAP, self._fromto)))
-        sizes = [last - first for first, last in slices]
-        candidates = np.flatnonzero(lower < np.repeat(bests, sizes)).tolist()
-        owner = np.repeat(np.arange(len(pairs)), sizes)
-        order = sorted(candidates, key=lambda k: lower[k])
-        for k in order:
-            p = int(owner[k])
-            if lower[k] >= bests[p]:
-                continue
-            geoms = (int(ia[k]), int(ib[k]))
-            if geoms == nearests[p]:
-                continue
-            d = mujoco.mj_geomDistance(self.model, data, geoms[0], geoms[1], bests[p], self._fromto)
-            if d < bests[p]:
-                bests[p], self._nearest[pairs[p]] = d, geoms
-        out = {pair: float(best) for pair, best in zip(pairs, bests)}
-        return out
+
+class StateDistances:
+    """The least signed distance between two objects' geoms in one state of one MjData (capped at
+    DISTANCE_CAP), by MuJoCo's own mj_geomDistance after a broad phase: the distance between two
+    geoms' world-aligned boxes bounds theirs below, so only pairs whose bound is under the best
+    distance found so far are computed, starting from the pair nearest at the last state."""
+
+    def __init__(self, world: MjWorld, data: mujoco.MjData):
+        self.world, self.data = world, data
+        self.exact: dict[tuple[str, str], float] = {}
+        self._lower2: np.ndarray | None = None  # the squared broad-phase bound of every batch row, once per state
+
+    def __call__(self, a: str, b: str, enough: float | None = None) -> float:
+        """The distance between a's and b's geoms; when `enough` is given and it is at most `enough`,
+        possibly only some value between it and `enough` (prsc/task/world.py, DistanceFn)."""
+        pair = (a, b)
+        found = self.exact.get(pair)
+        if found is not None:
+            return found
+        world, model, data = self.world, self.world.model, self.data
+        nearest = world._nearest.get(pair)
+        best = DISTANCE_CAP
+        if nearest is not None:
+            best = min(best, _geom_distance(model, data, nearest[0], nearest[1], DISTANCE_CAP, world._fromto))
+            if enough is not None and best <= enough:
+                return best  # the caller's answer does not depend on how much nearer the geoms are
+        rows = world._batch_rows.get(pair)
+        if rows is None:  # a pair the task did not announce (prepare): its own broad phase
+            ia, ib = world._pairs_of(a, b)
+            lower2 = world.lower_bounds(data, ia, ib)
+        else:
+            if self._lower2 is None:
+                self._lower2 = world.batch_lower_bounds(data)
+            first, last = rows
+            ia, ib, lower2 = world._batch_a[first:last], world._batch_b[first:last], self._lower2[first:last]
+        if best > 0.0:
+            candidates = np.flatnonzero(lower2 < best * best)
+            if candidates.size:
+                # nearest bound first: a pair whose bound is past the best found so far is not computed
+                for low2, first, second in sorted(zip(lower2[candidates].tolist(), ia[candidates].tolist(),
+                                                      ib[candidates].tolist())):
+                    if low2 >= best * best:
+                        break
+                    if (first, second) == nearest:
+                        continue
+                    d = _geom_distance(model, data, first, second, best, world._fromto)
+                    if d < best:
+                        best, world._nearest[pair] = d, (first, second)
+        self.exact[pair] = best = float(best)
+        return best
 
 
 _STILL = np.zeros(3)
@@ -189,7 +221,7 @@ class TaskMonitor:
     def state(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
         """The world state of `data` at `data.time` (distances computed when the task asks)."""
         poses = _LazyPoses(self.world, data, self.moving)
-        return WorldState(float(data.time), poses, lambda a, b: self.world.distance(data, a, b))
+        return WorldState(float(data.time), poses, self.world.distances(data))
 
     def update(self, model: mujoco.MjModel, data: mujoco.MjData) -> TaskStatus:
         """Evaluate the task at `data.time`."""

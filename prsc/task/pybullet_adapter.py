@@ -55,8 +55,8 @@ class PybulletTask:
             return {"bodyA": body, "linkIndexA": link}
         return {"bodyA": self.bodies[name]}
 
-    def distance(self, a: str, b: str) -> float:
-        """The least signed distance between a's and b's shapes (capped at DISTANCE_CAP)."""
+    def distance(self, a: str, b: str, enough: float | None = None) -> float:
+        """The least signed distance between a's and b's shapes (capped at DISTANCE_CAP; `enough` unused)."""
         if (a not in self.bodies and a not in self.links) or (b not in self.bodies and b not in self.links):
             return DISTANCE_CAP
         first, second = self._part(a), self._part(b)

@@ -51,6 +51,7 @@ class Evaluator:
         self.objects = {o.name: o for o in task.objects}
         self._corners = {o.name: box_corners(o.dimensions) for o in task.objects}
         self._half = {o.name: np.asarray(o.dimensions, dtype=float) / 2 for o in task.objects}
+        self._radius = {name: _norm(half) for name, half in self._half.items()}  # centre to corner
         self._boxes = {o.name: box_region(o.dimensions) for o in task.objects}
         self._supports = {o.name: prepared_polygon(o.support) for o in task.objects}
         self._compiled: dict[int, tuple[Term, Callable[[WorldState], object]]] = {}
@@ -157,8 +158,7 @@ class Evaluator:
             n = other.rotation @ np.asarray(DIRECTIONS[op])
             return float(n @ (pose.position - other.position)) - by - support_along(self._half[name], pose, n)
         if op == "at_rest":
-            radius = _norm(self._half[name])
-            return min(REST_SPEED - _norm(pose.linear), radius * (REST_ANGULAR - _norm(pose.angular)))
+            return min(REST_SPEED - _norm(pose.linear), self._radius[name] * (REST_ANGULAR - _norm(pose.angular)))
         if op == "upright":
             return UPRIGHT_ANGLE - math.acos(min(1.0, max(-1.0, float(pose.rotation[2, 2]))))
         if op == "holds":
@@ -181,7 +181,10 @@ class Evaluator:
             over = float(polygon_signed_distance(self._supports[target.name], local[:, :2]).min())
         else:
             over = point_polygon_distance(self._supports[target.name], float(local[0, 0]), float(local[0, 1]))
-        return min(ON_GAP - abs(gap), over, -world.distance(name, target_name))
+        near = min(ON_GAP - abs(gap), over)
+        # Touching the target only decides the minimum when it is further than -near: the distance
+        # function may stop as soon as it shows it is not (prsc/task/world.py, DistanceFn).
+        return min(near, -world.distance(name, target_name, -near))
 
     def _holds(self, robot: TaskObject, held: str, world: WorldState) -> float:
         if len(robot.fingers) < 2:

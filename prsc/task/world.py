@@ -2,14 +2,23 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
-DistanceFn = Callable[[str, str], float]
-"""(object or `object/link`, object) -> the minimum signed distance between their geoms in metres
-(negative: penetration; contact: <= 0), capped above at DISTANCE_CAP."""
+
+class DistanceFn(Protocol):
+    """(object or `object/link`, object) -> the minimum signed distance between their geoms in metres
+    (negative: penetration; contact: <= 0), capped above at DISTANCE_CAP.
+
+    `enough` lets a simulator stop early: when the distance is at most `enough`, any value between
+    the distance and `enough` is a right answer (the caller only needs to know it is no further).
+    A function that always returns the distance is right too."""
+
+    def __call__(self, a: str, b: str, enough: float | None = None) -> float: ...
+
 
 DISTANCE_CAP = 1.0  # m: a distance above this is reported as this (the robustness of `touches` saturates)
 

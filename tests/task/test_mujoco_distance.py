@@ -41,7 +41,7 @@ def test_the_geom_distance_is_the_distance_between_the_boxes():
             data.qpos[7 * k:7 * k + 3] = p
             data.qpos[7 * k + 3:7 * k + 7] = np.roll(r.as_quat(), 1)
         mujoco.mj_forward(model, data)
-        found = world.distance(data, "a", "b")
+        found = world.distances(data)("a", "b")
         pa, ra = data.xpos[1], data.xmat[1].reshape(3, 3)
         pb, rb = data.xpos[2], data.xmat[2].reshape(3, 3)
         expected = _box_gap(pa, ra, pb, rb)
@@ -49,6 +49,10 @@ def test_the_geom_distance_is_the_distance_between_the_boxes():
         if expected > 1e-9:
             assert abs(min(expected, small) - found) < 1e-6
             compared += 1
+            # asked only whether they are within `enough`: the answer lies between the distance and it
+            for enough in (found - 0.01, found + 0.01, found + 0.5):
+                bounded = world.distances(data)("a", "b", enough)
+                assert bounded == found if enough < found else found - 1e-12 <= bounded <= enough
         else:
             assert found <= 1e-9  # overlapping boxes: contact, `touches` holds
             touching += 1

@@ -28,7 +28,7 @@ def _pose(rng: np.random.Generator, spread: float) -> Pose:
 
 
 def _world(a: Pose, b: Pose, distance: float = 1.0) -> WorldState:
-    return WorldState(0.0, {"a": a, "b": b}, lambda x, y: distance)
+    return WorldState(0.0, {"a": a, "b": b}, lambda x, y, enough=None: distance)
 
 
 def _box_distance(point: np.ndarray, pose: Pose, dims) -> float:
@@ -129,7 +129,7 @@ def test_holds_needs_two_fingers_and_nothing_else_and_visible_needs_the_view():
              "cam": Pose(np.array([0, 0, 2.0]), down, still, still)}
 
     def world(distances):
-        return WorldState(0.0, poses, lambda a, b: distances.get((a, b), 0.3))
+        return WorldState(0.0, poses, lambda a, b, enough=None: distances.get((a, b), 0.3))
 
     gripped = {("arm/left", "cube"): -0.001, ("arm/right", "cube"): -0.002, ("cube", "table"): 0.4}
     assert evaluator.truth(holds, world(gripped)) == Truth(True, 0.001)
@@ -141,3 +141,28 @@ def test_holds_needs_two_fingers_and_nothing_else_and_visible_needs_the_view():
     assert evaluator.truth(visible, world({})).holds
     poses["cube"] = Pose(np.array([3.0, 0, 0.5]), np.eye(3), still, still)
     assert not evaluator.truth(visible, world({})).holds
+
+
+def test_a_distance_answered_only_as_far_as_enough_gives_the_same_robustness():
+    """`on` reads the distance with `enough` (prsc/task/world.py, DistanceFn): a simulator answering
+    as loosely as it may (enough itself, when the distance is within it) changes no robustness."""
+    rng = np.random.default_rng(4)
+    evaluator = Evaluator(_task())
+    asked = loose = 0
+    for _ in range(2000):
+        a, b = _pose(rng, 0.2), _pose(rng, 0.05)
+        distance = float(rng.uniform(-0.01, 0.3))
+
+        def lazy(x, y, enough=None):
+            nonlocal asked, loose
+            asked += 1
+            if enough is not None and distance <= enough:
+                loose += 1
+                return enough
+            return distance
+
+        for completely in (False, True):
+            term = _term("on", completely=completely)
+            exact = evaluator.robustness(term, _world(a, b, distance))
+            assert evaluator.robustness(term, WorldState(0.0, {"a": a, "b": b}, lazy)) == exact
+    assert loose > 500 and asked - loose > 500  # both answers were given often
