@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Callable
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -21,9 +21,8 @@ UPRIGHT_ANGLE = math.radians(10.0)  # `upright`: its up axis within this of worl
 ON_GAP = 0.01  # m: `on` rests on the surface within this
 
 
-@dataclass(frozen=True)
-class Truth:
-    """A predicate's value: whether it holds, and its robustness (positive where it holds)."""
+class Truth(NamedTuple):
+    """A predicate's value: whether it holds, and its robustness (positive where it holds). (Immutable.)"""
 
     holds: bool
     robustness: float
@@ -119,8 +118,10 @@ class Evaluator:
             first, second = children
             return lambda w: _compare(name, _as_number(first(w)), _as_number(second(w)))  # type: ignore[arg-type]
         if term.is_predicate:
+            measure = self._relation(term)
+
             def relation(w):
-                rho = self.robustness(term, w)
+                rho = measure(w)
                 return Truth(rho >= 0.0, rho)
             return relation
         raise ValueError(f"unknown task term {op!r}")
@@ -143,48 +144,80 @@ class Evaluator:
 
     def robustness(self, term: Term, world: WorldState) -> float:
         """The robustness of a relation or state word (it holds where it is >= 0)."""
+        return self._relation(term)(world)
+
+    def _relation(self, term: Term) -> Callable[[WorldState], float]:
+        """A relation's robustness as a function of the world state, its objects bound once."""
         op = term.op
         name = term.args[0].name
         if op == "touches":
-            return -world.distance(name, term.args[1].name)  # type: ignore[arg-type]
-        obj, pose = self.objects[name], world.poses[name]  # type: ignore[index]
+            other = term.args[1].name
+            return lambda w: -w.distance(name, other)  # type: ignore[arg-type]
+        obj = self.objects[name]  # type: ignore[index]
         if op in ("in", "on"):
-            target = term.args[1].name
-            return self._containment(op, term.completely, obj, pose, self.objects[target], world.poses[target],  # type: ignore[index]
-                                     world, name, target)  # type: ignore[arg-type]
+            return self._containment(op, term.completely, obj, self.objects[term.args[1].name])  # type: ignore[index]
         if op in DIRECTIONS:
-            other = world.poses[term.args[1].name]  # type: ignore[index]
-            by = _as_number(self.value(term.args[2], world)) if len(term.args) > 2 else 0.0
-            n = other.rotation @ np.asarray(DIRECTIONS[op])
-            return float(n @ (pose.position - other.position)) - by - support_along(self._half[name], pose, n)
+            other, axis, half = term.args[1].name, np.asarray(DIRECTIONS[op]), self._half[name]  # type: ignore[index]
+            by = self.compiled(term.args[2]) if len(term.args) > 2 else (lambda w: 0.0)
+
+            def direction(w):
+                pose, target = w.poses[name], w.poses[other]
+                n = target.rotation @ axis
+                return float(n @ (pose.position - target.position)) - _as_number(by(w)) - support_along(half, pose, n)
+            return direction
         if op == "at_rest":
-            return min(REST_SPEED - _norm(pose.linear), self._radius[name] * (REST_ANGULAR - _norm(pose.angular)))
+            radius = self._radius[name]  # type: ignore[index]
+
+            def at_rest(w):
+                pose = w.poses[name]
+                return min(REST_SPEED - _norm(pose.linear), radius * (REST_ANGULAR - _norm(pose.angular)))
+            return at_rest
         if op == "upright":
-            return UPRIGHT_ANGLE - math.acos(min(1.0, max(-1.0, float(pose.rotation[2, 2]))))
+            return lambda w: UPRIGHT_ANGLE - math.acos(min(1.0, max(-1.0, float(w.poses[name].rotation[2, 2]))))
         if op == "holds":
-            return self._holds(obj, term.args[1].name, world)  # type: ignore[arg-type]
+            held = term.args[1].name
+            return lambda w: self._holds(obj, held, w)  # type: ignore[arg-type]
         if op == "visible":
-            camera = term.args[1].name
-            return self._visible(obj, pose, self.objects[camera], world.poses[camera])  # type: ignore[index]
+            camera = self.objects[term.args[1].name]  # type: ignore[index]
+            return lambda w: self._visible(obj, w.poses[name], camera, w.poses[camera.name])
         raise ValueError(f"unknown task relation {op!r}")
 
-    def _containment(self, op: str, completely: bool, obj: TaskObject, pose: Pose, target: TaskObject,
-                     target_pose: Pose, world: WorldState, name: str, target_name: str) -> float:
-        points = (pose.position + self._corners[obj.name] @ pose.rotation.T) if completely else pose.position[None]
-        local = _local(target_pose, points)
+    def _containment(self, op: str, completely: bool, obj: TaskObject, target: TaskObject) -> Callable[[WorldState], float]:
+        name, target_name = obj.name, target.name
         if op == "in" and not target.container:
-            return float(prism_signed_distance(self._boxes[target.name], local).min())
-        surface = target.support
-        up = target_pose.rotation[:, 2]
-        gap = float(up @ (pose.position - target_pose.position)) - surface.high - support_along(self._half[name], pose, up)
-        if completely:
-            over = float(polygon_signed_distance(self._supports[target.name], local[:, :2]).min())
-        else:
-            over = point_polygon_distance(self._supports[target.name], float(local[0, 0]), float(local[0, 1]))
-        near = min(ON_GAP - abs(gap), over)
-        # Touching the target only decides the minimum when it is further than -near: the distance
-        # function may stop as soon as it shows it is not (prsc/task/world.py, DistanceFn).
-        return min(near, -world.distance(name, target_name, -near))
+            corners, box = self._corners[name], self._boxes[target_name]
+
+            def inside(w):
+                pose, target_pose = w.poses[name], w.poses[target_name]
+                points = (pose.position + corners @ pose.rotation.T) if completely else pose.position[None]
+                return float(prism_signed_distance(box, _local(target_pose, points)).min())
+            return inside
+        high, (hx, hy, hz), footprint = target.support.high, self._half[name].tolist(), self._supports[target_name]
+        corners = self._corners[name]
+
+        def resting(w):
+            # min(ON_GAP - |gap|, the footprint's signed distance, -distance(obj, target)), in floats:
+            # this runs at every control step (docs/tasks.md, Cost)
+            pose, target_pose = w.poses[name], w.poses[target_name]
+            (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = target_pose.rotation.tolist()
+            px, py, pz = pose.position.tolist()
+            tx, ty, tz = target_pose.position.tolist()
+            dx, dy, dz = px - tx, py - ty, pz - tz
+            (o00, o01, o02), (o10, o11, o12), (o20, o21, o22) = pose.rotation.tolist()
+            # the object's half-thickness along the target's up axis (r02, r12, r22): support_along
+            thickness = (hx * abs(o00 * r02 + o10 * r12 + o20 * r22) + hy * abs(o01 * r02 + o11 * r12 + o21 * r22)
+                         + hz * abs(o02 * r02 + o12 * r12 + o22 * r22))
+            gap = r02 * dx + r12 * dy + r22 * dz - high - thickness
+            if completely:
+                local = _local(target_pose, pose.position + corners @ pose.rotation.T)
+                over = float(polygon_signed_distance(footprint, local[:, :2]).min())
+            else:
+                over = point_polygon_distance(footprint, r00 * dx + r10 * dy + r20 * dz, r01 * dx + r11 * dy + r21 * dz)
+            near = min(ON_GAP - abs(gap), over)
+            # Touching the target only decides the minimum when it is further than -near: the distance
+            # function may stop as soon as it shows it is not (prsc/task/world.py, DistanceFn).
+            return min(near, -w.distance(name, target_name, -near))
+        return resting
 
     def _holds(self, robot: TaskObject, held: str, world: WorldState) -> float:
         if len(robot.fingers) < 2:

@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -23,9 +22,9 @@ class DistanceFn(Protocol):
 DISTANCE_CAP = 1.0  # m: a distance above this is reported as this (the robustness of `touches` saturates)
 
 
-@dataclass(frozen=True)
-class Pose:
-    """An object's box centre and rotation (box frame -> world), with its velocities (world frame)."""
+class Pose(NamedTuple):
+    """An object's box centre and rotation (box frame -> world), with its velocities (world frame).
+    (Immutable; a tuple because the monitor makes a few at every control step.)"""
 
     position: np.ndarray
     rotation: np.ndarray
@@ -33,9 +32,8 @@ class Pose:
     angular: np.ndarray
 
 
-@dataclass(frozen=True)
-class WorldState:
-    """Every object's pose at `time`, and distances between objects' (or links') geoms."""
+class WorldState(NamedTuple):
+    """Every object's pose at `time`, and distances between objects' (or links') geoms. (Immutable.)"""
 
     time: float
     poses: Mapping[str, Pose]
