@@ -71,7 +71,9 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
                 _timed(rendering.OffscreenRenderer, "rgb", totals, "render"), \
                 _timed(rendering.OffscreenRenderer, "depth", totals, "render"), \
                 _timed(rendering, "_render_context", totals, "render"), \
-                _timed(task_monitor.TaskMonitor, "update", totals, "monitor"):
+                _timed(task_monitor.TaskMonitor, "log", totals, "monitor"), \
+                _timed(task_monitor.TaskMonitor, "update", totals, "monitor"), \
+                _timed(task_monitor.TaskMonitor, "result", totals, "monitor"):
             for task in tasks[1:]:  # interleaved: both sides see the same machine load
                 cpu, wall = time.process_time(), time.perf_counter()
                 run_episodes(executor, config, [task], records.append)
@@ -106,6 +108,6 @@ def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) 
         without = t["cpu_without_task"]
         print(f"  the task: {t['cpu'] / episodes:.3f} CPU s per episode monitored, {without / episodes:.3f} without "
               f"(the same episodes, interleaved): {100 * (t['cpu'] - without) / max(without, 1e-9):+.1f}%; "
-              f"the monitor's own updates {t['monitor'] / episodes:.3f} CPU s per episode "
+              f"the monitor's own work {t['monitor'] / episodes:.3f} CPU s per episode "
               f"({100 * t['monitor'] / max(t['cpu'], 1e-9):.1f}% of a monitored episode)")
         print("  task outcomes: " + ", ".join(f"{o} {c}" for o, c in found["task_outcomes"].most_common()))

@@ -19,7 +19,7 @@ __all__ = ["TaskMonitor", "TaskStatus", "CONTROL_PERIOD"]
 
 _geom_distance = mujoco.mj_geomDistance
 CONTROL_PERIOD = 0.02  # s of simulated time between two evaluations of the task (50 Hz)
-LOGGED_STATES = 25  # states TaskMonitor.log keeps before evaluating them (0.5 s of control steps)
+LOGGED_STATES = 50  # states TaskMonitor.log keeps before evaluating them (1 s of control steps)
 _LOGGED = mujoco.mjtState.mjSTATE_FULLPHYSICS  # time, positions, velocities, activations, mocap poses
 
 
@@ -110,15 +110,16 @@ class MjWorld:
                           np.einsum("nij,nj->ni", np.abs(rotations), local[:, 3:]))
         return centres, halves
 
-    def batch_lower_bounds(self, data: mujoco.MjData) -> np.ndarray:
-        """Squared broad-phase bounds of every batch row (geom pair) in `data`'s state."""
+    def batch_lower_bounds(self, data: mujoco.MjData, positions: np.ndarray | None = None) -> np.ndarray:
+        """Squared broad-phase bounds of every batch row (geom pair) in `data`'s state, or, given
+        `positions` (states, ngeom, 3) of geoms in states of the same episode, in each of those."""
         if self._batch_boxes is None:
             self._place_batch(data)
         shift, halves = self._batch_boxes
-        position = data.geom_xpos
-        gaps = np.abs(position[self._batch_a] - position[self._batch_b] + shift) - halves
+        position = data.geom_xpos if positions is None else positions
+        gaps = np.abs(position[..., self._batch_a, :] - position[..., self._batch_b, :] + shift) - halves
         np.maximum(gaps, 0.0, out=gaps)
-        return np.einsum("nd,nd->n", gaps, gaps)
+        return np.einsum("...d,...d->...", gaps, gaps)
 
     def lower_bounds(self, data: mujoco.MjData, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
         """Squared broad-phase bounds of geom pairs (ia[k], ib[k]) outside the batch."""
@@ -142,9 +143,10 @@ class MjWorld:
         mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_BODY, b, velocity, 0)
         return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), velocity[3:], velocity[:3])
 
-    def distances(self, data: mujoco.MjData) -> StateDistances:
-        """The distances between geoms of `data`'s present state, computed when asked."""
-        return StateDistances(self, data)
+    def distances(self, data: mujoco.MjData, lower2: np.ndarray | None = None) -> StateDistances:
+        """The distances between geoms of `data`'s present state, computed when asked (`lower2`: the
+        batch's broad phase in this state, when already computed)."""
+        return StateDistances(self, data, lower2)
 
 
 class StateDistances:
@@ -153,10 +155,10 @@ class StateDistances:
     geoms' world-aligned boxes bounds theirs below, so only pairs whose bound is under the best
     distance found so far are computed, starting from the pair nearest at the last state."""
 
-    def __init__(self, world: MjWorld, data: mujoco.MjData):
+    def __init__(self, world: MjWorld, data: mujoco.MjData, lower2: np.ndarray | None = None):
         self.world, self.data = world, data
         self.exact: dict[tuple[str, str], float] = {}
-        self._lower2: np.ndarray | None = None  # the squared broad-phase bound of every batch row, once per state
+        self._lower2 = lower2  # the squared broad-phase bound of every batch row, once per state
 
     def __call__(self, a: str, b: str, enough: float | None = None) -> float:
         """The distance between a's and b's geoms; when `enough` is given and it is at most `enough`,
@@ -236,23 +238,32 @@ class TaskMonitor:
             self.evaluate_logged()
 
     def evaluate_logged(self) -> None:
-        """Evaluate the logged states in order (`update` on each), on the monitor's own MjData."""
-        if self._count and self._replay is None:
+        """Evaluate the logged states in order (`update` on each), on the monitor's own MjData: first
+        their geoms' positions, for one broad phase over all of them, then each state's task."""
+        if not self._count:
+            return
+        if self._replay is None:
             self._replay = mujoco.MjData(self.model)
-        model, replay = self.model, self._replay
-        for row in self._logged[:self._count]:
+        model, replay, rows = self.model, self._replay, self._logged[:self._count]
+        positions = np.empty((len(rows), model.ngeom, 3))
+        for row, position in zip(rows, positions):
+            mujoco.mj_setState(model, replay, row, _LOGGED)
+            mujoco.mj_kinematics(model, replay)
+            position[:] = replay.geom_xpos
+        lower2 = self.world.batch_lower_bounds(replay, positions)
+        for row, bounds in zip(rows, lower2):
             mujoco.mj_setState(model, replay, row, _LOGGED)
             # what the task reads: body and geom poses, centres of mass and velocities
             mujoco.mj_kinematics(model, replay)
             mujoco.mj_comPos(model, replay)
             mujoco.mj_comVel(model, replay)
-            self.update(model, replay)
+            self.latest = self.monitor.update(self.state(model, replay, bounds))
         self._count = 0
 
-    def state(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
+    def state(self, model: mujoco.MjModel, data: mujoco.MjData, lower2: np.ndarray | None = None) -> WorldState:
         """The world state of `data` at `data.time` (distances computed when the task asks)."""
         poses = _LazyPoses(self.world, data, self.moving)
-        return WorldState(float(data.time), poses, self.world.distances(data))
+        return WorldState(float(data.time), poses, self.world.distances(data, lower2))
 
     def update(self, model: mujoco.MjModel, data: mujoco.MjData) -> TaskStatus:
         """Evaluate the task at `data.time`."""

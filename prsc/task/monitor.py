@@ -66,6 +66,9 @@ class EpisodeMonitor:
         self.best_goal = -math.inf
         self.worst_failure = {f.label: -math.inf for f in statements.failures}
         self.records: dict[str, object] = {r.name: [] for r in statements.records if r.when == "step"}
+        # each statement as a function of the world state, made once (updates run at every control step)
+        self._goals = [(self.evaluator.compiled(g.expr), g.hold, w) for g, w in zip(statements.goals, self.windows)]
+        self._failures = [(self.evaluator.compiled(f.expr), f.label, f"fail:{f.label}") for f in statements.failures]
 
     def update(self, world: WorldState) -> TaskStatus:
         """Evaluate every statement at `world.time`; the status after it."""
@@ -79,11 +82,11 @@ class EpisodeMonitor:
         goal_value = math.inf
         goals_hold = bool(statements.goals)
         all_now = True
-        for goal, window in zip(statements.goals, self.windows):
-            truth = self.evaluator.truth(goal.expr, world)
+        for goal, hold, window in self._goals:
+            truth = goal(world)
             all_now = all_now and truth.holds
             value = window.push(time, truth.robustness, truth.holds)
-            if time - self.start < goal.hold - TIME_SLACK:  # type: ignore[operator]
+            if time - self.start < hold - TIME_SLACK:  # type: ignore[operator]
                 value = min(value, 0.0)  # a window the episode has not filled yet has not held
             goal_value = min(goal_value, value)
             goals_hold = goals_hold and window.held(time)
@@ -93,12 +96,12 @@ class EpisodeMonitor:
             if first:
                 self.trivial = all_now
         failed = None
-        for failure in statements.failures:
-            truth = self.evaluator.truth(failure.expr, world)
-            self.worst_failure[failure.label] = max(self.worst_failure[failure.label], truth.robustness)
-            robustness[f"fail:{failure.label}"] = -truth.robustness
+        for failure, label, key in self._failures:
+            truth = failure(world)
+            self.worst_failure[label] = max(self.worst_failure[label], truth.robustness)
+            robustness[key] = -truth.robustness
             if truth.holds and failed is None:
-                failed = failure.label
+                failed = label
         for record in statements.records:
             if record.when == "step" or (record.when == "initial" and first):
                 value = json_value(self.evaluator.value(record.expr, world))

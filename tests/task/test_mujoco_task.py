@@ -33,22 +33,28 @@ def tray_floor_point(scene: dict) -> np.ndarray:
 
 
 def run_script(scene, model, script, seconds: float) -> dict:
-    """Step `seconds` of simulated time, `script(data)` before each step placing the cube (or not)."""
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
-    monitor = TaskMonitor(scene, model)
-    cube = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "cube")
-    qpos = model.jnt_qposadr[model.body_jntadr[cube]]
-    dof = model.jnt_dofadr[model.body_jntadr[cube]]
-    with StepHook(model, data, [PeriodicCallback(CONTROL_PERIOD, monitor.update)]):
-        while data.time < seconds:
-            target = script(data.time)
-            if target is not None:
-                data.qpos[qpos:qpos + 3] = target
-                data.qpos[qpos + 3:qpos + 7] = [1, 0, 0, 0]
-                data.qvel[dof:dof + 6] = 0
-            mujoco.mj_step(model, data)
-    return monitor.result(model, data, controller_finished=True)
+    """Step `seconds` of simulated time, `script(data)` before each step placing the cube (or not),
+    watched twice: each control step evaluated as it happens (`update`, what a recorder reads), and
+    logged then evaluated together (`log`, what `prsc run` does). Both records must be the same."""
+    results = []
+    for watch in ("update", "log"):
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        monitor = TaskMonitor(scene, model)
+        cube = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "cube")
+        qpos = model.jnt_qposadr[model.body_jntadr[cube]]
+        dof = model.jnt_dofadr[model.body_jntadr[cube]]
+        with StepHook(model, data, [PeriodicCallback(CONTROL_PERIOD, getattr(monitor, watch))]):
+            while data.time < seconds:
+                target = script(data.time)
+                if target is not None:
+                    data.qpos[qpos:qpos + 3] = target
+                    data.qpos[qpos + 3:qpos + 7] = [1, 0, 0, 0]
+                    data.qvel[dof:dof + 6] = 0
+                mujoco.mj_step(model, data)
+        results.append(monitor.result(model, data, controller_finished=True))
+    assert results[0] == results[1]
+    return results[0]
 
 
 def test_a_cube_carried_5_cm_above_the_tray_is_no_success(scene_and_model):
