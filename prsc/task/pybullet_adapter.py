@@ -71,7 +71,8 @@ class PybulletTask:
         position, quaternion = p.multiplyTransforms(com, com_quaternion, back, back_quaternion)
         position = np.asarray(position, dtype=float)
         rotation = np.asarray(p.getMatrixFromQuaternion(quaternion), dtype=float).reshape(3, 3)
-        linear = linear + np.cross(angular, position - np.asarray(com, dtype=float))  # the frame's own velocity
+        (wx, wy, wz), (rx, ry, rz) = angular, position - np.asarray(com, dtype=float)
+        linear = linear + (wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx)  # the frame's own velocity
         return Pose(position, rotation, linear, angular)
 
     def _part(self, name: str) -> dict:

@@ -145,3 +145,19 @@ def test_load_reads_the_task_file_and_the_objects_box_frames(scene, compiled, ou
         assert pybullet.getBasePositionAndOrientation(table, physicsClientId=client)[0][2] > scene["objects"][0]["position"][2] + 0.1
     finally:
         pybullet.disconnect(client)
+
+
+def test_the_docs_example_runs_as_written(compiled, capsys):
+    """docs/tasks.md's pybullet block, on the compiled SDF world: the cube stays on the table, so the
+    task times out at `terminate after 3 seconds`."""
+    import re
+
+    text = (Path(__file__).parents[2] / "docs" / "tasks.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "PybulletTask.load" in b)
+    code = block.replace('"out/spec/', f'"{compiled}/').replace("00003", "00000")  # the one scene compiled
+    try:
+        exec(compile(code, "docs/tasks.md", "exec"), {})
+    finally:
+        pybullet.disconnect()
+    out = capsys.readouterr().out
+    assert "'outcome': 'timeout'" in out, out
