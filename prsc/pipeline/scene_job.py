@@ -98,9 +98,7 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
         files[target] = rel
         if listed(index, target) and (root / rel).exists():
             continue
-        if (root / rel).exists() and not job.adopt_unlisted:
-            raise PrscError(f"{root / rel} exists and is not listed in {root / MANIFEST}: prsc did not write it "
-                            "and will not replace it; move it away or choose another output folder")
+        _refuse_unlisted(job, root, rel)
         missing.append(target)
     messages: list[str] = []
     if not missing:
@@ -112,9 +110,8 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
         task = task_json(scene_data)
         tasks = {t: job.task_relative(t, index) if task is not None else None for t in missing}
         for rel in tasks.values():
-            if rel is not None and (root / rel).exists() and not job.adopt_unlisted:
-                raise PrscError(f"{root / rel} exists and is not listed in {root / MANIFEST}: prsc did not write it "
-                                "and will not replace it; move it away or choose another output folder")
+            if rel is not None:
+                _refuse_unlisted(job, root, rel)
         for target in missing:
             path = root / files[target]
             try:
@@ -151,6 +148,13 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     messages = [str(w.message) for w in caught if issubclass(w.category, UnknownModelWarning)]
     return index, files, messages
+
+
+def _refuse_unlisted(job: Job, root: Path, rel: str) -> None:
+    """A file at one of this run's names that prsc did not write (the manifest is not this run's) stops it."""
+    if (root / rel).exists() and not job.adopt_unlisted:
+        raise PrscError(f"{root / rel} exists and is not listed in {root / MANIFEST}: prsc did not write it "
+                        "and will not replace it; move it away or choose another output folder")
 
 
 def _remove_written(path: Path) -> None:

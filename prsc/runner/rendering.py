@@ -6,7 +6,7 @@ sizes. Uploading the Panda's meshes costs about 0.1 CPU s, so a worker keeps the
 of the last model and hands it to the next model with the same render assets and the same
 `context_inputs` (the numbers a context bakes in: stat.extent sets the ground's grid, the
 shadow clip and the fog). The images are the same bits a fresh context renders
-(tests/runner/test_rendering.py); `prsc.SceneEnv`'s renderers use the same test.
+(tests/runner/test_rendering.py); `prsc.SceneEnv`'s renderers compare the same inputs.
 """
 
 from __future__ import annotations

@@ -47,6 +47,7 @@ class PybulletTask:
         self.links = dict(links or {})
         self.client = client
         self.monitor = EpisodeMonitor(self.task)
+        self._moving: dict[str, list[tuple[int, int | None]]] = {}  # each name's parts (see _parts)
 
     @classmethod
     def load(cls, scene: str | os.PathLike[str], client: int = 0) -> PybulletTask:
@@ -75,22 +76,39 @@ class PybulletTask:
         linear = linear + (wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx)  # the frame's own velocity
         return Pose(position, rotation, linear, angular)
 
-    def _part(self, name: str) -> dict:
+    def _parts(self, name: str) -> list[tuple[int, int | None]]:
+        """(body, link or None for every link) pairs whose shapes stand for `name`: one link of a
+        "robot/link" name; the moving links of a fixed-base robot, as in MuJoCo (its base rests
+        where it was placed: prsc/runner/task_monitor.py); else the whole body."""
         if name in self.links:
-            body, link = self.links[name]
-            return {"bodyA": body, "linkIndexA": link}
-        return {"bodyA": self.bodies[name]}
+            return [self.links[name]]
+        parts = self._moving.get(name)
+        if parts is None:
+            body, p, client = self.bodies[name], self.p, self.client
+            fixed_base = p.getDynamicsInfo(body, -1, physicsClientId=client)[0] == 0
+            moving: list[int] = []
+            for link in range(p.getNumJoints(body, physicsClientId=client)):
+                info = p.getJointInfo(body, link, physicsClientId=client)
+                if info[2] != p.JOINT_FIXED or info[16] in moving:  # its own joint moves, or its parent does
+                    moving.append(link)
+            parts = self._moving[name] = [(body, k) for k in moving] if fixed_base and moving else [(body, None)]
+        return parts
 
     def distance(self, a: str, b: str) -> float:
         """The least signed distance between a's and b's shapes (capped at DISTANCE_CAP)."""
         if (a not in self.bodies and a not in self.links) or (b not in self.bodies and b not in self.links):
             return DISTANCE_CAP
-        first, second = self._part(a), self._part(b)
-        query = {**first, "bodyB": second["bodyA"]}
-        if "linkIndexA" in second:
-            query["linkIndexB"] = second["linkIndexA"]
-        points = self.p.getClosestPoints(distance=DISTANCE_CAP, physicsClientId=self.client, **query)
-        return min([DISTANCE_CAP] + [float(point[8]) for point in points])
+        least = DISTANCE_CAP
+        for body_a, link_a in self._parts(a):
+            for body_b, link_b in self._parts(b):
+                query = {"bodyA": body_a, "bodyB": body_b}
+                if link_a is not None:
+                    query["linkIndexA"] = link_a
+                if link_b is not None:
+                    query["linkIndexB"] = link_b
+                points = self.p.getClosestPoints(distance=DISTANCE_CAP, physicsClientId=self.client, **query)
+                least = min([least] + [float(point[8]) for point in points])
+        return least
 
     def state(self, time: float) -> WorldState:
         """The world state now (poses of the task's objects; distances when asked)."""

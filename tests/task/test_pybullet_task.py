@@ -161,3 +161,30 @@ def test_the_docs_example_runs_as_written(compiled, capsys):
         pybullet.disconnect()
     out = capsys.readouterr().out
     assert "'outcome': 'timeout'" in out, out
+
+
+def test_a_robot_on_the_table_is_scored_as_in_mujoco(tmp_path):
+    """table_cube through its SDF world: a mounted arm touches with its moving links only (its base
+    stands on the table, as in MuJoCo), its fingers are found by name, and each statement's
+    robustness at the start matches MuJoCo's monitor on the MJCF to 5 mm."""
+    import json
+
+    from prsc.cli import main
+    from prsc.runner.harness import fresh_data, load_model
+    from prsc.runner.task_monitor import TaskMonitor
+
+    spec = Path(__file__).parents[2] / "specs" / "table_cube.prs"
+    assert main(["compile", str(spec), "--target", "json,mjcf,sdf", "-n", "1", "-o", str(tmp_path)]) == 0
+    root = tmp_path / "table_cube"
+    model = load_model(root / "mjcf" / "00000.xml")
+    in_mujoco = TaskMonitor(json.loads((root / "json" / "00000.json").read_text()), model).update(model, fresh_data(model))
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        task = PybulletTask.load(root / "sdf" / "00000.sdf", client)
+        in_pybullet = task.update(0.0)
+        assert sorted(task.links) == ["r1/leftfinger", "r1/rightfinger", "r2/leftfinger", "r2/rightfinger"]
+    finally:
+        pybullet.disconnect(client)
+    assert in_mujoco.robustness["fail:arm on table"] > 0.1  # the arms start clear of the table top
+    for label, value in in_mujoco.robustness.items():
+        assert abs(in_pybullet.robustness[label] - value) < 0.005, (label, in_pybullet.robustness, in_mujoco.robustness)
