@@ -119,3 +119,13 @@ def test_a_full_disk_mid_run_leaves_each_scene_file_with_its_task_file_listed(tm
     for k in scenes:
         assert json.loads((root / listed[f"{k}:mjcf.task"]).read_text())["format"] == "prsc-task"
     assert not [p for p in root.rglob(".*") if p.name.endswith(".tmp")]
+
+
+def test_each_scene_has_its_own_task_file_because_the_task_holds_its_boxes(tmp_path):
+    spec = tmp_path / "sizes.prs"
+    spec.write_text("a = Object at Vector3D(0, 0, 1), with width (0.1, 0.3)\n"
+                    'fail "fell" when a.z < 0.5\n')
+    assert main(["compile", str(spec), "--target", "mjcf", "-n", "2", "-o", str(tmp_path / "out")]) == 0
+    tasks = [json.loads((tmp_path / "out" / "sizes" / "mjcf" / f"0000{k}.task.json").read_text()) for k in (0, 1)]
+    assert tasks[0]["failures"] == tasks[1]["failures"]  # the same statements...
+    assert tasks[0]["objects"][0]["dimensions"][0] != tasks[1]["objects"][0]["dimensions"][0]  # ...on each scene's box
