@@ -19,12 +19,14 @@ from prsc.backends.store import AssetStore
 
 @dataclass(frozen=True)
 class Target:
-    """An output format: its backend module, file suffix and whether it is a bundle folder."""
+    """An output format: its backend module, file suffix, whether it is a bundle folder, and whether
+    its output holds the scene's task itself (else a `<index>.task.json` file goes beside it)."""
 
     name: str
     module: str
     suffix: str
     bundle: bool = False
+    task_inside: bool = False  # the scene JSON's "task" key; a bundle's task.json (docs/tasks.md)
 
     def render(self) -> Callable[[Scene, Path, AssetStore], Any]:
         """The backend's render function (imported on first use)."""
@@ -36,9 +38,9 @@ class Target:
 
 
 TARGETS: dict[str, Target] = {
-    "json": Target("json", "prsc.backends.json", ".json"),
+    "json": Target("json", "prsc.backends.json", ".json", task_inside=True),
     "mjcf": Target("mjcf", "prsc.backends.mjcf", ".xml"),
-    "urdf": Target("urdf", "prsc.backends.urdf", "", bundle=True),
+    "urdf": Target("urdf", "prsc.backends.urdf", "", bundle=True, task_inside=True),
     "sdf": Target("sdf", "prsc.backends.sdf", ".sdf"),
     "usd": Target("usd", "prsc.backends.usd", ".usda"),
 }

@@ -43,6 +43,8 @@ SLOW = (
     "tests/runner/test_pick_any_arm.py::test_pick_lifts_every_cube_and_puts_it_back[franka_urdf]",
     "tests/sampling/test_group_gibbs.py::test_sixteen_sweeps_forget_the_start_and_two_do_not",
     "tests/api/test_resets.py::test_every_image_is_loaded_once_and_apply_shows_the_scenes",
+    "tests/api/test_renderer_reuse.py::test_a_renderer_kept_across_resets_renders_what_a_fresh_one_does[20]",
+    "tests/task/test_pybullet_task.py::test_a_robot_on_the_table_is_scored_as_in_mujoco",
     "tests/sampling/test_scene_checks.py::test_baseline_samplers_satisfy_every_relation[bin_twenty_parts.prs]",
     "tests/sampling/test_scene_checks.py::test_exact_scenes_satisfy_every_relation[sequential-200-bin_twenty_parts.prs]",
 )

@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterable
 
 from prsc.pipeline.outputs import write_error
 from prsc.errors import PrscError
+from prsc.task.terms import TASK_SUFFIX
 
 MANIFEST = "manifest.json"
 DEFAULT_WIDTH = 5  # digits of a scene file name (more when -n needs them)
@@ -37,9 +38,10 @@ MANIFEST_FORMAT = "prsc-manifest"
 CHECKPOINT_SECONDS = 2.0  # manifest.json is rewritten at most this often during a run
 
 
-def record_file(root: Path, index: int, target: str, rel: str) -> None:
-    """Append one finished file to the journal: a single O_APPEND write, so lines never interleave."""
-    line = json.dumps({"index": index, "files": {target: rel}}, separators=(",", ":")) + "\n"
+def record_files(root: Path, index: int, files: dict[str, str]) -> None:
+    """Append a scene's finished files (a target's file and its task file) to the journal: a single
+    O_APPEND write, so lines never interleave and the two are listed together or not at all."""
+    line = json.dumps({"index": index, "files": files}, separators=(",", ":")) + "\n"
     data = line.encode()
     handle = os.open(root / JOURNAL, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
     try:
@@ -51,6 +53,11 @@ def record_file(root: Path, index: int, target: str, rel: str) -> None:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(root / JOURNAL))
     finally:
         os.close(handle)
+
+
+def task_key(target: str) -> str:
+    """The manifest key of a file target's task file ("mjcf.task")."""
+    return f"{target}.task"
 
 
 def output_root(output: Path, path: Path) -> Path:
@@ -156,15 +163,17 @@ def _entry_files(root: Path, entry: Any, where: str) -> tuple[int, dict[str, str
         raise bad(f"index {index!r} is not a scene number")
     if not isinstance(files, dict):
         raise bad(f"scene {index}: files is not an object")
-    for target, rel in files.items():
-        if target not in TARGETS or not isinstance(rel, str):
-            raise bad(f"scene {index}: {target!r}: {rel!r} is not an output of prsc")
-        suffix = TARGETS[target].suffix
+    for key, rel in files.items():
+        target, _, part = str(key).partition(".")
+        if target not in TARGETS or part not in ("", "task") or (part and TARGETS[target].task_inside) \
+                or not isinstance(rel, str):
+            raise bad(f"scene {index}: {key!r}: {rel!r} is not an output of prsc")
+        suffix = TASK_SUFFIX if part else TARGETS[target].suffix
         folder, _, name = rel.partition("/")
         digits = name[: len(name) - len(suffix)] if suffix else name
         if folder != target or not name.endswith(suffix) or not digits.isdigit() or not digits.isascii() \
                 or int(digits) != index or len(digits) < DEFAULT_WIDTH:
-            raise bad(f"scene {index}: {target!r}: {rel!r} is not an output of prsc")
+            raise bad(f"scene {index}: {key!r}: {rel!r} is not an output of prsc")
     return index, dict(files)
 
 

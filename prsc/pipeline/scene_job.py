@@ -9,10 +9,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from prsc.pipeline.output_folder import MANIFEST, record_file
+from prsc.pipeline.output_folder import MANIFEST, record_files, task_key
 from prsc.pipeline.outputs import write_error
 from prsc.pipeline.scene_sources import spec_sampler
 from prsc.errors import PrscError
+from prsc.task.terms import TASK_FILE, TASK_SUFFIX
 
 
 # ------------------------------------------------------------------ jobs
@@ -59,11 +60,15 @@ class Job:
 
         return f"{target}/{TARGETS[target].filename(index, self.width)}"
 
+    def task_relative(self, target: str, index: int) -> str | None:
+        """Path of a scene's task file beside its output for one target, or None when the output
+        holds the task itself (the scene JSON, a bundle's task.json)."""
+        from prsc.backends import TARGETS
+
+        return None if TARGETS[target].task_inside else f"{target}/{index:0{self.width}d}{TASK_SUFFIX}"
+
 
 # ------------------------------------------------------------------ one scene
-
-TASK_FILE = "task.json"
-
 
 def task_json(scene: dict) -> str | None:
     """The scene's compiled task as the text of task.json, or None when the spec states no task."""
@@ -93,9 +98,7 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
         files[target] = rel
         if listed(index, target) and (root / rel).exists():
             continue
-        if (root / rel).exists() and not job.adopt_unlisted:
-            raise PrscError(f"{root / rel} exists and is not listed in {root / MANIFEST}: prsc did not write it "
-                            "and will not replace it; move it away or choose another output folder")
+        _refuse_unlisted(job, root, rel)
         missing.append(target)
     messages: list[str] = []
     if not missing:
@@ -105,23 +108,39 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
         scene_data = job.scene(index)
         scene = parse_scene(scene_data)
         task = task_json(scene_data)
+        tasks = {t: job.task_relative(t, index) if task is not None else None for t in missing}
+        for rel in tasks.values():
+            if rel is not None:
+                _refuse_unlisted(job, root, rel)
         for target in missing:
             path = root / files[target]
             try:
                 data = TARGETS[target].render()(scene, path, store)
-                # The compiled task (docs/tasks.md): a bundle holds it as task.json (in place
-                # with the bundle, whole or not at all); the scene JSON holds it under "task".
-                if TARGETS[target].bundle:
-                    atomic_write_tree(path, {**data, TASK_FILE: task} if task is not None else data)
-                else:
-                    atomic_write(path, data)
-                try:
-                    record_file(root, index, target, files[target])
-                except OSError:
-                    _remove_written(path)  # in place but not recorded: this run just wrote it, so it goes
-                    raise
             except OSError as error:
                 raise write_error(error, path) from None
+            # The compiled task (docs/tasks.md): a bundle holds it as task.json (in place with the
+            # bundle, whole or not at all); a file target's task file is renamed into place first
+            # and journalled with the scene's file in one line.
+            written = {target: files[target]}
+            if tasks[target] is not None:
+                written = {task_key(target): tasks[target], **written}
+            placed: list[Path] = []
+            current = path
+            try:
+                for key, rel in written.items():
+                    current = root / rel
+                    if key == target and TARGETS[target].bundle:
+                        atomic_write_tree(current, {**data, TASK_FILE: task} if task is not None else data)
+                    else:
+                        atomic_write(current, task if key != target else data)
+                    placed.append(current)
+                current = path  # a journal that cannot take the line fails the scene's output
+                record_files(root, index, written)
+            except OSError as error:
+                for done in placed:  # in place but not recorded: this run just wrote them, so they go
+                    _remove_written(done)
+                raise write_error(error, current) from None
+            files.update(written)
     from prsc.backends.bodies import UnknownModelWarning
 
     for w in caught:  # others (e.g. MuJoCo's mesh decoder) go back to Python's filters
@@ -129,6 +148,13 @@ def render_one(job: Job, index: int, listed: Callable[[int, str], bool] = lambda
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     messages = [str(w.message) for w in caught if issubclass(w.category, UnknownModelWarning)]
     return index, files, messages
+
+
+def _refuse_unlisted(job: Job, root: Path, rel: str) -> None:
+    """A file at one of this run's names that prsc did not write (the manifest is not this run's) stops it."""
+    if (root / rel).exists() and not job.adopt_unlisted:
+        raise PrscError(f"{root / rel} exists and is not listed in {root / MANIFEST}: prsc did not write it "
+                        "and will not replace it; move it away or choose another output folder")
 
 
 def _remove_written(path: Path) -> None:

@@ -3,9 +3,10 @@
 A MuJoCo render context (MjrContext) holds what the GPU side needs of a model: its
 meshes, textures, height fields, skins and materials' textures, plane grids, buffer
 sizes. Uploading the Panda's meshes costs about 0.1 CPU s, so a worker keeps the context
-of the last model and hands it to the next model with the same render assets (every scene
-of a spec), after setting the few numbers that follow the model's size (fog, shadow clip).
-The images are the same bits a fresh context renders (tests/runner/test_rendering.py).
+of the last model and hands it to the next model with the same render assets and the same
+`context_inputs` (the numbers a context bakes in: stat.extent sets the ground's grid, the
+shadow clip and the fog). The images are the same bits a fresh context renders
+(tests/runner/test_rendering.py); `prsc.SceneEnv`'s renderers compare the same inputs.
 """
 
 from __future__ import annotations
@@ -89,7 +90,7 @@ class OffscreenRenderer:
         self._context = None
 
 
-_kept: tuple[str, mujoco.MjrContext] | None = None  # (render-asset key, context) of the last model
+_kept: tuple[tuple[str, tuple], mujoco.MjrContext] | None = None  # ((assets digest, context inputs), context) of the last model
 
 
 def _render_key(model: mujoco.MjModel) -> str:
@@ -110,19 +111,30 @@ def _render_key(model: mujoco.MjModel) -> str:
     return digest.hexdigest()
 
 
+PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)  # an int: numpy compares an array with MuJoCo's enum 6x slower
+
+
+def context_inputs(model: mujoco.MjModel) -> tuple:
+    """The numbers of a model a render context bakes in when made, besides its assets: what
+    MuJoCo's mjr_makeContext (src/render/classic/render_context.c) reads that `scenario.apply`
+    or a user may change. stat.extent sets shadowClip, fogStart and fogEnd (the last two also as
+    GL state), and the grid of an infinite plane, the ground, which spans 2.1 * zfar * extent:
+    a context made at another extent draws the ground from other vertices, and a pixel or two
+    comes out one level off (docs/learning.md). Cheap: compared at every render."""
+    planes = model.geom_type == PLANE
+    m, g = model.vis.map, model.vis.global_
+    return (float(model.stat.extent), m.zfar, m.shadowclip, m.shadowscale, m.fogstart, m.fogend,
+            tuple(model.vis.rgba.fog), g.linewidth, model.geom_size[planes].tobytes(),
+            model.geom_matid[planes].tobytes(), model.mat_texid.tobytes(), model.mat_texuniform.tobytes(),
+            model.mat_texrepeat.tobytes())
+
+
 def _render_context(model: mujoco.MjModel) -> mujoco.MjrContext:
     """This worker's render context for a model: the kept one when the render assets match, else a new one."""
     global _kept
-    key = _render_key(model)
+    key = (_render_key(model), context_inputs(model))
     if _kept is not None and _kept[0] == key:
         context = _kept[1]
-        # What mjr_makeContext derives from the model's size and map settings.
-        context.fogStart = model.stat.extent * model.vis.map.fogstart
-        context.fogEnd = model.stat.extent * model.vis.map.fogend
-        context.fogRGBA = model.vis.rgba.fog
-        context.shadowClip = model.stat.extent * model.vis.map.shadowclip
-        context.shadowScale = model.vis.map.shadowscale
-        context.lineWidth = model.vis.global_.linewidth
     else:
         if _kept is not None:
             _kept[1].free()

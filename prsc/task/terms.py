@@ -3,12 +3,18 @@ geometry needed to evaluate them from poses alone, and their JSON form (scene JS
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 FORMAT = "prsc-task"
 VERSION = 1
 DEFAULT_HOLD = 0.5  # s: `goal EXPR` without `for` holds this long (docs/tasks.md)
+TASK_FILE = "task.json"  # a URDF bundle's task file
+TASK_SUFFIX = ".task.json"
+"""Scene k's task file beside its MJCF, SDF or USD file: `<target>/<k>.task.json` (a URDF bundle holds
+it as `task.json`, the scene JSON under "task"). One per scene: the task holds each object's box."""
 
 PREDICATES = frozenset({"and", "or", "not", "compare", "in", "on", "left", "right", "ahead", "behind", "above",
                         "below", "touches", "holds", "at_rest", "upright", "visible", "true"})
@@ -183,6 +189,15 @@ class Task:
                           for r in data["records"]),
         )
         return cls(statements, tuple(_object_of(o) for o in data["objects"]))
+
+
+def task_file(output: str | os.PathLike[str]) -> Path:
+    """The task file of one scene's output: `<k>.task.json` beside `mjcf/<k>.xml`, `sdf/<k>.sdf` or
+    `usd/<k>.usda`, and `task.json` inside a URDF bundle folder `urdf/<k>/`."""
+    path = Path(output)
+    if path.is_dir():
+        return path / TASK_FILE
+    return path.with_name(path.name.split(".", 1)[0] + TASK_SUFFIX)
 
 
 def _region_json(r: Region) -> dict[str, Any]:
