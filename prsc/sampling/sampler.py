@@ -200,13 +200,16 @@ class Sampler:
             scene["task"] = bind_task(self.program.task, scene).to_json()
         return scene
 
-    def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
+    def drawer(self, seed: int, ahead: int = 64, grow_to: int | None = None) -> Callable[[int], dict[str, Any]]:
         """index -> scene JSON under `seed`; a batched or chunked path draws the next indices at once
-        and hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once."""
+        and hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once.
+        With `grow_to`, each draw after the first takes twice as many as the last, up to `grow_to`
+        (a reset loop: its first scene soon, then the rate of large batches); scene k is the same."""
         path = self.plan.path
         if path != BATCHED and not self.plan.chunked:
             return functools.partial(self.scene, seed)
         drawn: dict[int, Any] = {}  # index -> scene JSON (batched) or a candidate round's Drawn
+        size = [ahead]  # how many the next draw takes
 
         def scene(index: int) -> dict[str, Any]:
             if index not in drawn:
@@ -214,7 +217,9 @@ class Sampler:
                 # Candidate rounds and sweeps take 16 ahead: a worker asked for a few scenes draws few more.
                 # Batches and Gibbs rounds take all `ahead`: their cost is numpy calls per round, not scenes.
                 wide = path in (BATCHED, GIBBS_ROUNDS)
-                chunk = range(index, index + (ahead if wide else min(ahead, 16)))
+                chunk = range(index, index + (size[0] if wide else min(size[0], 16)))
+                if grow_to is not None:
+                    size[0] = max(size[0], min(2 * size[0], grow_to))
                 # They hand over results, each made JSON (or its error raised) only when asked for: a scene
                 # that cannot be written does not take the scenes before it in the chunk with it.
                 if path == BATCHED:

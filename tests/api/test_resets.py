@@ -53,7 +53,7 @@ def _fresh_at_home(scene):
     return fresh, _at_home(fresh)
 
 
-@pytest.mark.parametrize("spec", ["table_cube", "bin_picking"])
+@pytest.mark.parametrize("spec", ["table_cube", "bin_picking", "bin_ten_parts"])
 def test_apply_gives_the_model_a_fresh_compile_gives(spec):
     # The sequential law draws bin_picking 10x faster than the joint one; apply does not care.
     scenario = Scenario(compile_sampler(REPO / "specs" / f"{spec}.prs", law="sequential"))
@@ -73,8 +73,53 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
         worst["xquat"] = max(worst["xquat"], float(np.max(np.abs(data.xquat - fresh_data.xquat))))
         sizes.add(model.geom_size.tobytes())
     assert {name: error for name, error in worst.items() if error > 1e-9} == {}
-    if spec == "bin_picking":
+    if spec != "table_cube":
         assert len(sizes) == SCENES  # the parts' sizes really changed from scene to scene
+
+
+def test_apply_writes_new_sizes_of_primitives_without_parsing_them(monkeypatch):
+    # bin_ten_parts: washers of random diameter and bolts of random height. After the first scene,
+    # apply neither parses nor resolves them again, and what it writes is a fresh model's.
+    import prsc.backends.shared_model as shared_model
+    from prsc.backends.scene import parse_scene
+
+    scenario = Scenario(compile_sampler(REPO / "specs" / "bin_ten_parts.prs", law="sequential"))
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    scenario.apply(scenario.scene(0, 1), model, data)
+
+    def refused(*args, **kwargs):
+        raise AssertionError("parsed or resolved again")
+
+    monkeypatch.setattr(shared_model, "parse_object", refused)
+    monkeypatch.setattr(shared_model, "resolve_body", refused)
+    monkeypatch.setattr(shared_model, "parse_scene", refused)
+    for index in (2, 3):
+        scene = scenario.scene(0, index)
+        scenario.apply(scene, model, data)
+        fresh = prsc.mujoco_model(scene)
+        for name in ("geom_size", "geom_rbound", "geom_aabb", "body_mass", "body_inertia", "body_invweight0"):
+            assert np.max(np.abs(getattr(model, name) - getattr(fresh, name))) <= 1e-9, name
+    # A bad size is refused with the scene parser's own message, and the model still takes scenes.
+    bad = copy.deepcopy(scenario.scene(0, 4))
+    bad["objects"][2]["dimensions"][0] = -0.05
+    with pytest.raises(PrscError) as refusal:
+        scenario.apply(bad, model, data)
+    with pytest.raises(PrscError) as parsed:
+        parse_scene(bad)  # the scene parser itself (imported before the patch)
+    assert refusal.value.message == parsed.value.message
+    assert "dimensions" in refusal.value.message
+    scenario.apply(scenario.scene(0, 4), model, data)
+
+
+def test_plain_shape_models_are_their_primitive():
+    # The cube and cylinder assets are the object's primitive (what lets apply write them by formula).
+    from prsc.assets.registry import part_recipe
+    from prsc.backends.bodies import PLAIN_SHAPE_MODELS, primitive_part
+
+    for dimensions in ((0.05, 0.08, 0.02), (0.3, 0.1, 0.7), (0.01, 0.01, 0.01)):
+        for model, shape in PLAIN_SHAPE_MODELS.items():
+            assert part_recipe(model)(dimensions) == (primitive_part(shape, dimensions),)
 
 
 def test_a_scene_the_model_cannot_hold_is_an_error_naming_what_differs():
