@@ -35,6 +35,7 @@ size changes (a mesh's scale is baked into its vertices), or an image the model 
 from __future__ import annotations
 
 from dataclasses import replace
+from itertools import chain
 from pathlib import Path
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
@@ -203,9 +204,7 @@ class SharedModel:
                 self._resize(scene_json["objects"], resized)
             if changed:
                 self._apply_objects(scene_json, changed)
-        poses = np.array([scene_position(raw.get("position"), f"scene JSON: object {body.name!r}.position")
-                          + unit_quaternion(raw.get("quaternion"), f"scene JSON: object {body.name!r}.quaternion")
-                          for body, raw in zip(self._bodies, scene_json["objects"])], dtype=float).reshape(-1, 7)
+        poses = self._poses(scene_json["objects"])
         model.body_pos[self._body_ids] = poses[~self._is_light, :3]
         model.body_quat[self._body_ids] = poses[~self._is_light, 3:]
         if len(self._light_ids):
@@ -232,6 +231,28 @@ class SharedModel:
         else:
             mujoco.mj_resetData(model, data)
         mujoco.mj_forward(model, data)
+
+    def _poses(self, objects: list[Any]) -> np.ndarray:
+        """Each object's position and unit quaternion (rows of 7, the quaternion normalised), validated
+        as the scene parser does: all at once, and one by one (for the parser's message) when that fails."""
+        try:
+            positions = [raw["position"] for raw in objects]
+            quaternions = [raw["quaternion"] for raw in objects]
+            exact = {type(v) for v in chain(chain.from_iterable(positions), chain.from_iterable(quaternions))}
+            poses = np.hstack([np.array(positions, dtype=float), np.array(quaternions, dtype=float)])
+        except (KeyError, TypeError, ValueError):
+            exact, poses = set(), np.empty((0, 7))
+        if exact <= {float, int} and poses.shape == (len(objects), 7) and np.isfinite(poses).all():
+            q = poses[:, 3:]
+            norm = np.sqrt(q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3])  # unit_quaternion's
+            if np.all(np.abs(norm - 1.0) <= 1e-6):
+                q /= norm[:, None]
+                return poses
+        if not all(isinstance(raw, Mapping) for raw in objects):
+            raise PrscError("scene JSON: objects: expected a list of objects")
+        return np.array([scene_position(raw.get("position"), f"object {body.obj.label!r}.position")
+                         + unit_quaternion(raw.get("quaternion"), f"object {body.obj.label!r}.quaternion")
+                         for body, raw in zip(self._bodies, objects)], dtype=float).reshape(-1, 7)
 
     def _changed(self, scene_json: Mapping[str, Any]) -> tuple[list[int], dict[int, dict[str, Any]]] | None:
         """The objects to parse again, and the primitives whose dimensions and mass alone changed (with

@@ -112,6 +112,24 @@ def test_apply_writes_new_sizes_of_primitives_without_parsing_them(monkeypatch):
     scenario.apply(scenario.scene(0, 4), model, data)
 
 
+@pytest.mark.parametrize("pose, message", [
+    (("quaternion", [1.0, 0.0, 0.0, 0.5]), "expected a unit quaternion"),
+    (("position", [0.1, True, 0.8]), "expected finite numbers"),
+    (("position", [0.1, "0.2", 0.8]), "expected finite numbers"),
+    (("position", [0.1, 0.2]), "expected a list of 3 numbers"),
+    (("quaternion", None), "expected a list of 4 numbers"),
+])
+def test_a_bad_pose_is_refused_with_the_scene_parser_s_message(pose, message):
+    # apply reads every pose at once; a pose that fails is read again one by one for the parser's message.
+    scenario = prsc.load(REPO / "specs" / "table_cube.prs")
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    bad = copy.deepcopy(scenario.scene(0, 1))
+    next(o for o in bad["objects"] if o["name"] == "c1")[pose[0]] = pose[1]
+    with pytest.raises(PrscError, match=f"scene JSON: object 'c1'.{pose[0]}: {message}"):
+        scenario.apply(bad, model, data)
+
+
 def test_plain_shape_models_are_their_primitive():
     # The cube and cylinder assets are the object's primitive (what lets apply write them by formula).
     from prsc.assets.registry import part_recipe

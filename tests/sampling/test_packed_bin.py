@@ -69,20 +69,6 @@ def test_the_scenes_hold_the_spec_and_scene_k_is_the_same_in_any_chunk():
     assert sampler.batch(7, [12, 5]) == [scenes[12], scenes[5]]
 
 
-def test_a_growing_drawer_takes_twice_the_last_draw_and_gives_the_same_scenes(monkeypatch):
-    # A reset loop's drawer (SceneEnv): the first draw small, each later one twice the last up to a cap.
-    sampler = Sampler(compile_program(str(SPEC)), "exact")
-    scenes = sampler.batch(7, range(40))
-    draws: list[int] = []
-    results = sampler.results
-    monkeypatch.setattr(sampler, "results", lambda seed, chunk: draws.append(len(chunk)) or results(seed, chunk))
-    drawer = sampler.drawer(7, 2, grow_to=8)
-    assert [drawer(k) for k in range(30)] == scenes[:30]
-    assert draws == [2, 4, 8, 8, 8]
-    assert drawer(35) == scenes[35] and drawer(33) == scenes[33]  # out of order: drawn again, still scene k
-    assert draws[-2:] == [8, 8]
-
-
 def test_the_stored_reference_is_what_rejection_draws():
     stored = load()
     assert stored.shape == (4000, len(LABELS))
