@@ -26,8 +26,8 @@ written into one MuJoCo model without recompiling (docs/learning.md). Needs the 
 
 from __future__ import annotations
 
-import copy
 import os
+import pickle
 from typing import Any, Callable, Mapping, Sequence
 
 import gymnasium
@@ -157,8 +157,11 @@ class SceneEnv(gymnasium.Env):
         self._steps = 0
         self.scenario.apply(self.scene, self.model, self.data)
         info = self._task.reset(self.scene, self.model, self.data) if self._task else {}
-        # A copy: a caller may keep or edit what it was given (Gymnasium's rule); once per episode.
-        return self._observation(), {"scene": copy.deepcopy(self.scene), **info}
+        # A copy: a caller may keep or edit what it was given (Gymnasium's rule); once per episode. The scene
+        # is JSON data: a pickle round trip copies it whole in a fifth of copy.deepcopy's time (86 against 398 us
+        # on bin_ten_parts, as much as `apply` itself).
+        copied = pickle.loads(pickle.dumps(self.scene, protocol=pickle.HIGHEST_PROTOCOL))
+        return self._observation(), {"scene": copied, **info}
 
     def step(self, action):
         """Set the controls (clipped to the action space) and step MuJoCo `frame_skip` times."""

@@ -342,7 +342,9 @@ def test_camera_observations_are_the_spec_cameras_images():
 def test_steps_give_no_scene_and_truncate_at_max_episode_steps():
     env = prsc.SceneEnv(REPO / "specs" / "table_cube.prs", max_episode_steps=3)
     _, info = env.reset(seed=0)
-    assert info["scene"]["index"] == 0
+    assert info["scene"]["index"] == 0 and info["scene"] == env.scene
+    info["scene"]["objects"][0]["position"][0] += 1.0  # a copy: the caller's to edit
+    assert info["scene"] != env.scene
     outcomes = [env.step(env.action_space.sample()) for _ in range(3)]
     assert [truncated for *_, truncated, _ in outcomes] == [False, False, True]
     assert all("scene" not in info for *_, info in outcomes)  # the task's status only (Table-Cube states one)
