@@ -288,8 +288,8 @@ class SharedModel:
         dimensions = np.array([object_dimensions(objects[k].get("dimensions"), w) for k, w in zip(resized, where)])
         masses = np.array([object_mass(objects[k].get("mass"), w, free=not self._bodies[k].fixed)
                            for k, w in zip(resized, where)])
+        # Its Body keeps the numbers it was resolved with: of a primitive's Body only its name and structure are read.
         self._write_primitives(list(resized), dimensions, masses)
-        # A primitive's Body keeps the numbers it was resolved with: after that only its name and structure are read.
         for k, signature in resized.items():
             self._signatures[k] = signature  # type: ignore[index]
 
@@ -305,7 +305,8 @@ class SharedModel:
             sizes = primitive_geom_sizes(shape, extents)
             geoms, bodies = ids[:, 1], ids[:, 0]
             model.geom_size[geoms] = sizes
-            model.geom_rbound[geoms], half = _bounds(shape, sizes)
+            rbound, half = _bounds(shape, sizes)
+            model.geom_rbound[geoms] = rbound
             model.geom_aabb[geoms, :3] = 0.0
             model.geom_aabb[geoms, 3:] = half
             model.body_mass[bodies] = masses[rows]

@@ -5,7 +5,7 @@ written into one MuJoCo model without recompiling (docs/learning.md). Needs the 
   (seed 0 when no seed was ever given), so a run is reproducible scene by scene; when the spec's
   sampler batches, scenes are drawn `draw_ahead` at a time after a seeded reset, each later draw
   twice the last up to `draw_ahead_max` (a seeded reset stays cheap, and the steady rate is that
-  of large batches; scene k is the same);
+  of large batches; scene k is the same; a `draw_ahead_max` below `draw_ahead` keeps it fixed);
 - `step(action)` sets `data.ctrl` and steps MuJoCo `frame_skip` times; the action space is
   bounded (`action_bounds`); `max_episode_steps` steps give `truncated`;
 - the observation is `qpos` and `qvel` by default; `observation="cameras"` gives every camera
@@ -124,8 +124,8 @@ class SceneEnv(gymnasium.Env):
         self._render_camera = -1 if render_camera is None else render_camera
         self._seed = 0
         self._next_index = 0
-        if not 1 <= draw_ahead <= draw_ahead_max:
-            raise ValueError(f"need 1 <= draw_ahead <= draw_ahead_max, got {draw_ahead} and {draw_ahead_max}")
+        if draw_ahead < 1:
+            raise ValueError(f"draw_ahead must be >= 1, got {draw_ahead}")
         self._draw_ahead = (draw_ahead, draw_ahead_max)
         self._draw = self.scenario.drawer(self._seed, *self._draw_ahead)
         self._steps = 0
