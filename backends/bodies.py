@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from prsc.assets.open_containers import container_parts
-from prsc.assets.parts import Part, box, cylinder, sphere
+from prsc.assets.parts import Part
 from prsc.assets.articulated import RobotModel, robot_model
-from prsc.assets.registry import part_recipe
+from prsc.assets.registry import normalise_model, part_recipe
 from prsc.user_assets.asset_files import ROOT_OFFSET, names_asset_file
-from prsc.backends.inertia import Inertial, composite_inertial
+from prsc.backends.inertia import PRIMITIVES, Inertial, composite_inertial
 from prsc.backends.scene import CameraSpec, LightSpec, Scene, SceneObject
 from prsc.backends.store import AssetStore, pbr_maps, texture_of
 from prsc.errors import PrscError
@@ -103,15 +103,41 @@ def resolve_mesh_source(obj: SceneObject, scene: Scene, store: AssetStore, prop:
         raise PrscError(f"object {obj.label or obj.name!r}: {error.message}", obj=obj.label or obj.name) from None
 
 
+PLAIN_SHAPE_MODELS = {"cube": "box", "cylinder": "cylinder"}
+"""Part assets that are one primitive filling the object's box (prsc.assets.solids), by normalised model name."""
+
+
+def primitive_shape(obj: SceneObject) -> str | None:
+    """The primitive (box, cylinder, sphere) that is all of the object's geometry, filling or inscribed
+    in its box (no robot, camera, light, container interior or image), else None: then its part and
+    mass properties are formulas of its dimensions and mass (`primitive_extents`, `primitive_inertia`)."""
+    if obj.light is not None or obj.camera is not None or "texture" in obj.properties:
+        return None
+    shape = obj.shape if obj.model is None else PLAIN_SHAPE_MODELS.get(normalise_model(obj.model))
+    if shape not in PRIMITIVES or object_interior(obj) is not None:
+        return None
+    return shape
+
+
+def primitive_extents(shape: str, dimensions: np.ndarray) -> np.ndarray:
+    """Full extents (rows x y z) of the `shape` parts of boxes `dimensions` (rows): a box fills its
+    box, a z-axis cylinder and a sphere are inscribed in it."""
+    dims = np.asarray(dimensions, dtype=float).reshape(-1, 3)
+    if shape == "box":
+        return dims
+    across = np.minimum(dims[:, 0], dims[:, 1]) if shape == "cylinder" else dims.min(axis=1)
+    return np.stack([across, across, dims[:, 2] if shape == "cylinder" else across], axis=1)
+
+
+def primitive_part(shape: str, dimensions: tuple[float, float, float]) -> Part:
+    """The one part of an object of `primitive_shape` `shape` and box `dimensions`, named as its shape."""
+    return Part(shape, shape, tuple(float(v) for v in primitive_extents(shape, dimensions)[0]))  # type: ignore[arg-type]
+
+
 def shape_parts(obj: SceneObject, scene: Scene, store: AssetStore) -> tuple[Part, ...]:
     """The object's own shape (box, cylinder, sphere or mesh) filling or inscribed in its box."""
-    w, l, h = obj.dimensions
-    if obj.shape == "box":
-        return (box("box", obj.dimensions),)
-    if obj.shape == "cylinder":
-        return (cylinder("cylinder", min(w, l) / 2, h),)
-    if obj.shape == "sphere":
-        return (sphere("sphere", min(obj.dimensions) / 2),)
+    if obj.shape in PRIMITIVES:
+        return (primitive_part(obj.shape, obj.dimensions),)
     source = resolve_mesh_source(obj, scene, store)
     collision = str(obj.properties.get("collision", "hull")).strip().lower()
     try:
@@ -144,6 +170,10 @@ def resolve_body(obj: SceneObject, scene: Scene, store: AssetStore) -> Body:
     """Resolve one object: asset recipe, robot or plain shape, and its mass properties."""
     if obj.light is not None:
         return Body(obj, (), MOUNT_INERTIAL, None, None)
+    shape = primitive_shape(obj)
+    if shape is not None:
+        parts = (primitive_part(shape, obj.dimensions),)
+        return Body(obj, parts, composite_inertial(parts, obj.mass), None, None)
     try:
         # A file asset is a robot when the scene gives it a `tcp` (every Robot subclass does).
         folders = mesh_folders(scene.spec, store.mesh_dirs) if obj.model is not None and names_asset_file(obj.model) else ()

@@ -5,10 +5,11 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from prsc.assets.parts import Part
+from prsc.assets.parts import IDENTITY, Part
 from prsc.geometry.rotations import matrix_to_quat, quat_to_matrix
 
 
@@ -52,20 +53,44 @@ def mesh_properties(path: str) -> MeshProperties:
     return MeshProperties(volume, tuple(centroid), tuple(map(tuple, second)))
 
 
+PRIMITIVES = ("box", "cylinder", "sphere")
+"""Part shapes whose mass properties are formulas of their size."""
+
+
+def primitive_moments(shape: str, sx: Any, sy: Any, sz: Any) -> tuple[Any, tuple[Any, Any, Any]]:
+    """Volume and principal second moments (density 1, about the centre) of a box, z-axis cylinder
+    or sphere of full extents sx, sy, sz: floats, or arrays of many at once (the same numbers)."""
+    if shape == "box":
+        v = sx * sy * sz
+        return v, (v / 12.0 * (sx * sx), v / 12.0 * (sy * sy), v / 12.0 * (sz * sz))
+    if shape == "cylinder":
+        r = np.minimum(sx, sy) / 2  # Part.radius
+        v = math.pi * r * r * sz
+        return v, (v * (r * r / 4), v * (r * r / 4), v * (sz * sz / 12))
+    if shape == "sphere":
+        r = np.minimum(np.minimum(sx, sy), sz) / 2
+        v = 4.0 / 3.0 * math.pi * (r * r * r)  # not r**3: numpy's vectorised pow rounds otherwise than C's
+        moment = v * r * r / 5
+        return v, (moment, moment, moment)
+    raise ValueError(f"not a primitive part shape: {shape!r}")
+
+
+def primitive_inertia(shape: str, sizes: np.ndarray, masses: np.ndarray) -> np.ndarray:
+    """Principal moments (rows x y z) of bodies each one primitive part of full extents `sizes`
+    (rows) at the body's origin, of `masses`: the axes are the body's, the centre of mass its origin."""
+    volume, moments = primitive_moments(shape, *np.asarray(sizes, dtype=float).T)
+    density = np.asarray(masses, dtype=float) / volume
+    s0, s1, s2 = (density * m for m in moments)
+    trace = s0 + s1 + s2  # as composite_inertial's tensor: trace(second) I - second
+    return np.stack([trace - s0, trace - s1, trace - s2], axis=-1)
+
+
 def _unit_second_moment(part: Part) -> tuple[float, np.ndarray, np.ndarray]:
     """Volume, centroid and second moment about the part origin (part frame, density 1)."""
     sx, sy, sz = part.size
-    if part.shape == "box":
-        v = sx * sy * sz
-        return v, np.zeros(3), v / 12.0 * np.diag([sx * sx, sy * sy, sz * sz])
-    if part.shape == "cylinder":
-        r, h = part.radius, sz
-        v = math.pi * r * r * h
-        return v, np.zeros(3), v * np.diag([r * r / 4, r * r / 4, h * h / 12])
-    if part.shape == "sphere":
-        r = part.radius
-        v = 4.0 / 3.0 * math.pi * r**3
-        return v, np.zeros(3), v * r * r / 5 * np.eye(3)
+    if part.shape in PRIMITIVES:
+        v, moments = primitive_moments(part.shape, sx, sy, sz)
+        return float(v), np.zeros(3), np.diag(moments)
     if part.shape == "mesh":
         props = mesh_properties(part.mesh)
         scale = np.diag(part.size)
@@ -73,6 +98,11 @@ def _unit_second_moment(part: Part) -> tuple[float, np.ndarray, np.ndarray]:
         second = det * scale @ np.asarray(props.second_moment) @ scale
         return props.volume * det, scale @ np.asarray(props.centroid), second
     raise ValueError(f"unknown part shape {part.shape!r}")
+
+
+def is_plain_primitive(part: Part) -> bool:
+    """A box, cylinder or sphere at the body's origin, along its axes."""
+    return part.shape in PRIMITIVES and part.position == (0.0, 0.0, 0.0) and part.quaternion == IDENTITY
 
 
 @functools.lru_cache(maxsize=4096)
@@ -83,6 +113,10 @@ def composite_inertial(parts: tuple[Part, ...], mass: float) -> Inertial:
     solids = [part for part in parts if part.visible]
     if not solids:
         raise ValueError("a body needs at least one visible part")
+    if len(solids) == 1 and is_plain_primitive(solids[0]):
+        # One primitive at the origin: the formula shared with a shared model's resets (prsc.backends.shared_model).
+        return _with_principal_axes(mass, np.zeros(3), np.diag(primitive_inertia(
+            solids[0].shape, np.array([solids[0].size]), np.array([mass]))[0]))
     volumes, centroids, seconds = [], [], []
     for part in solids:
         v, c, s = _unit_second_moment(part)

@@ -29,9 +29,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+import numpy as np
+
 from prsc.user_assets.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
+from prsc.backends.inertia import PRIMITIVES
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, light_directions, resolve_bodies
 from prsc.backends.numbers import num, nums
 from prsc.backends.scene import Scene
@@ -138,15 +141,23 @@ def _geom_type(shape: str):
     }[shape]
 
 
+def primitive_geom_sizes(shape: str, extents: np.ndarray) -> np.ndarray:
+    """MuJoCo `size` rows (half extents; radius and half height; radius) of box, cylinder or sphere
+    parts of full `extents` (rows x y z)."""
+    extents = np.asarray(extents, dtype=float).reshape(-1, 3)
+    if shape == "box":
+        return extents / 2
+    cylinder = shape == "cylinder"
+    radius = (np.minimum(extents[:, 0], extents[:, 1]) if cylinder else extents.min(axis=1)) / 2  # Part.radius
+    zeros = np.zeros(len(extents))
+    return np.stack([radius, extents[:, 2] / 2 if cylinder else zeros, zeros], axis=1)
+
+
 def geom_size(part) -> tuple[float, ...]:
-    """A primitive part's MuJoCo `size` (half extents, radius and half height, or radius)."""
-    if part.shape == "box":
-        return tuple(s / 2 for s in part.size)
-    if part.shape == "cylinder":
-        return (part.radius, part.size[2] / 2, 0.0)
-    if part.shape == "sphere":
-        return (part.radius, 0.0, 0.0)
-    return (0.0, 0.0, 0.0)
+    """A part's MuJoCo `size` (`primitive_geom_sizes`; a mesh's is its own)."""
+    if part.shape not in PRIMITIVES:
+        return (0.0, 0.0, 0.0)
+    return tuple(float(v) for v in primitive_geom_sizes(part.shape, part.size)[0])
 
 
 def _check_masses(scene: Scene, bodies: tuple[Body, ...]) -> None:

@@ -153,6 +153,31 @@ def _light(properties: Mapping[str, Any], color: tuple[float, ...], where: str) 
     return LightSpec(kind, tuple(color[:3]), intensity, cutoff, shadow)  # type: ignore[arg-type]
 
 
+def object_dimensions(value: Any, where: str) -> tuple[float, float, float]:
+    """An object's `dimensions` (width, length, height), validated; `where` names the object."""
+    dims = _floats(value, 3, f"{where}.dimensions")
+    if any(d <= 0.0 for d in dims):
+        raise _fail(f"{where}.dimensions", f"width, length and height must be positive, got {list(dims)}")
+    for axis, size in zip(("width", "length", "height"), dims):
+        problem = size_problem(size)
+        if problem:
+            raise _fail(f"{where}.dimensions", f"{axis} {problem}")
+    return dims  # type: ignore[return-value]
+
+
+def object_mass(value: Any, where: str, free: bool) -> float:
+    """An object's `mass`, validated (a free body's must be positive); `where` names the object."""
+    mass = _floats([value], 1, f"{where}.mass")[0]
+    if mass < 0.0:
+        raise _fail(f"{where}.mass", f"must not be negative, got {mass}")
+    problem = mass_problem(mass)
+    if problem:
+        raise _fail(f"{where}.mass", problem)
+    if free and mass == 0.0:
+        raise _fail(f"{where}.mass", "a free body needs a positive mass")
+    return mass
+
+
 def _object(raw: Any, k: int) -> dict[str, Any]:
     """The fields of one scene object (SceneObject's, but its element name), validated."""
     where = f"objects[{k}]"
@@ -163,22 +188,10 @@ def _object(raw: Any, k: int) -> dict[str, Any]:
         raise _fail(where, f"invalid object name {name!r}")
     where = f"object {name!r}"
     quat = unit_quaternion(raw.get("quaternion"), f"{where}.quaternion")
-    dims = _floats(raw.get("dimensions"), 3, f"{where}.dimensions")
-    if any(d <= 0.0 for d in dims):
-        raise _fail(f"{where}.dimensions", f"width, length and height must be positive, got {list(dims)}")
-    for axis, value in zip(("width", "length", "height"), dims):
-        problem = size_problem(value)
-        if problem:
-            raise _fail(f"{where}.dimensions", f"{axis} {problem}")
+    dims = object_dimensions(raw.get("dimensions"), where)
     static = raw.get("static", False)
     if not isinstance(static, bool):
         raise _fail(f"{where}.static", f"expected true or false, got {static!r}")
-    mass = _floats([raw.get("mass")], 1, f"{where}.mass")[0]
-    if mass < 0.0:
-        raise _fail(f"{where}.mass", f"must not be negative, got {mass}")
-    problem = mass_problem(mass)
-    if problem:
-        raise _fail(f"{where}.mass", problem)
     shape = raw.get("shape", "box")
     if shape not in SHAPES:
         raise _fail(f"{where}.shape", f"expected one of {', '.join(SHAPES)}, got {shape!r}")
@@ -191,8 +204,7 @@ def _object(raw: Any, k: int) -> dict[str, Any]:
     if model is not None and not isinstance(model, str):
         raise _fail(f"{where}.model", f"expected a string or null, got {model!r}")
     camera = _camera(raw.get("camera"), f"{where}.camera")
-    if not static and camera is None and mass == 0.0:
-        raise _fail(f"{where}.mass", "a free body needs a positive mass")
+    mass = object_mass(raw.get("mass"), where, free=not static and camera is None)
     joints = raw.get("joints") or {}
     if not isinstance(joints, (dict, Mapping)) or not all(isinstance(k, str) for k in joints):
         raise _fail(f"{where}.joints", "expected an object of joint name -> value")

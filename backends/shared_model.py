@@ -18,7 +18,13 @@ numbers into that model and its data:
 - `stat.center`/`stat.extent` as the compiler derives them (cameras' clip planes scale with them);
 - then `mj_resetDataKeyframe(home)` and `mj_forward`.
 
-Only the objects whose JSON changed since the scene applied last are parsed and resolved
+Only the objects whose JSON changed since the scene applied last are written again. An object
+that is one primitive (backends/bodies.py `primitive_shape`: a box, cylinder or sphere with no
+image, camera or container interior) and whose dimensions and mass alone changed is not parsed
+or resolved: its new numbers are validated as the scene parser does, and its geom size, bounds,
+mass and inertia are computed for all such objects at once by the formulas the MJCF writer uses
+(`primitive_extents`, `primitive_geom_sizes`, `primitive_inertia`): every primitive's size and
+mass is written that way, also in a whole scene. Any other change parses and resolves the object
 again; an object whose image alone changed only switches material.
 
 A scene the shared model cannot hold is an error naming what differs: another structure
@@ -29,15 +35,19 @@ size changes (a mesh's scale is baked into its vertices), or an image the model 
 from __future__ import annotations
 
 from dataclasses import replace
+from itertools import chain
 from pathlib import Path
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from prsc.backends.bodies import Body, light_directions, resolve_body, resolve_bodies, texture_image
-from prsc.backends.mjcf import RobotFragment, geom_rgba, geom_size, robot_fragment
-from prsc.backends.scene import Scene, parse_object, parse_scene, scene_position, unit_quaternion
+from prsc.backends.bodies import (Body, light_directions, primitive_extents, primitive_shape, resolve_body,
+                                  resolve_bodies, texture_image)
+from prsc.backends.inertia import primitive_inertia
+from prsc.backends.mjcf import RobotFragment, geom_rgba, geom_size, primitive_geom_sizes, robot_fragment
+from prsc.backends.scene import (Scene, object_dimensions, object_mass, parse_object, parse_scene, scene_position,
+                                 unit_quaternion)
 from prsc.backends.scene_structure import SceneStructure, difference, scene_structure
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
@@ -54,16 +64,24 @@ def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
     return signature
 
 
-def _bounds(shape: str, size: tuple[float, ...]) -> tuple[float, np.ndarray]:
-    """MuJoCo's bounding sphere radius and axis-aligned half sizes of a primitive geom."""
+SIZE_KEYS = ("dimensions", "mass")
+"""What of a primitive object's JSON is written without parsing it (`_resize`)."""
+
+
+def _sized_alike(signature: Mapping[str, Any], old: Mapping[str, Any]) -> bool:
+    """Whether two objects' signatures differ in their dimensions and mass at most."""
+    return len(signature) == len(old) and all(
+        key in SIZE_KEYS or (key in old and value == old[key]) for key, value in signature.items())
+
+
+def _bounds(shape: str, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """MuJoCo's bounding sphere radii and axis-aligned half sizes of primitive geoms of MuJoCo `sizes` (rows)."""
     if shape == "box":
-        half = np.array(size[:3])
-        return float(np.linalg.norm(half)), half
+        return np.sqrt(np.einsum("ij,ij->i", sizes, sizes)), sizes
+    radius = sizes[:, 0]
     if shape == "cylinder":
-        radius, half_height = size[0], size[1]
-        return float(np.hypot(radius, half_height)), np.array([radius, radius, half_height])
-    radius = size[0]
-    return float(radius), np.array([radius, radius, radius])
+        return np.hypot(radius, sizes[:, 1]), np.stack([radius, radius, sizes[:, 1]], axis=1)
+    return radius.copy(), np.stack([radius, radius, radius], axis=1)
 
 
 def _image_name(raw: Mapping[str, Any]) -> Any:
@@ -146,6 +164,9 @@ class SharedModel:
         self._meshes = {(b.name, p.name): (p.mesh, np.array(p.size)) for b in bodies for p in b.parts if p.shape == "mesh"}
         self._scene = scene
         self._bodies = list(bodies)
+        # Per object, the primitive that is all of it (sizes and masses written by `_write_primitives`), or None.
+        self._shapes: list[str | None] = [primitive_shape(b.obj) for b in bodies]
+        self._primitive_ids: dict[int, tuple[int, int]] = {}  # object -> (its body, its geom), once looked up
         self._signatures: list[dict[str, Any]] | None = None  # of the scene applied last: all but poses and images
         self._image_names: list[Any] = []  # of the scene applied last, per object
         self._params: Any = None
@@ -174,14 +195,16 @@ class SharedModel:
         import mujoco
 
         model = self.model
-        changed = self._changed(scene_json)
-        if changed is None:
+        found = self._changed(scene_json)
+        if found is None:
             self._apply_whole(scene_json)
-        elif changed:
-            self._apply_objects(scene_json, changed)
-        poses = np.array([scene_position(raw.get("position"), f"scene JSON: object {body.name!r}.position")
-                          + unit_quaternion(raw.get("quaternion"), f"scene JSON: object {body.name!r}.quaternion")
-                          for body, raw in zip(self._bodies, scene_json["objects"])], dtype=float).reshape(-1, 7)
+        else:
+            changed, resized = found
+            if resized:
+                self._resize(scene_json["objects"], resized)
+            if changed:
+                self._apply_objects(scene_json, changed)
+        poses = self._poses(scene_json["objects"])
         model.body_pos[self._body_ids] = poses[~self._is_light, :3]
         model.body_quat[self._body_ids] = poses[~self._is_light, 3:]
         if len(self._light_ids):
@@ -209,17 +232,45 @@ class SharedModel:
             mujoco.mj_resetData(model, data)
         mujoco.mj_forward(model, data)
 
-    def _changed(self, scene_json: Mapping[str, Any]) -> list[int] | None:
-        """The objects to parse again (only their image changed, to a known one: switched here), or
+    def _poses(self, objects: list[Any]) -> np.ndarray:
+        """Each object's position and unit quaternion (rows of 7, the quaternion normalised), validated
+        as the scene parser does: all at once, and one by one (for the parser's message) when that fails."""
+        try:
+            positions = [raw["position"] for raw in objects]
+            quaternions = [raw["quaternion"] for raw in objects]
+            exact = {type(v) for v in chain(chain.from_iterable(positions), chain.from_iterable(quaternions))}
+            poses = np.hstack([np.array(positions, dtype=float), np.array(quaternions, dtype=float)])
+        except (KeyError, TypeError, ValueError):
+            exact, poses = set(), np.empty((0, 7))
+        if exact <= {float, int} and poses.shape == (len(objects), 7) and np.isfinite(poses).all():
+            q = poses[:, 3:]
+            norm = np.sqrt(q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3])  # unit_quaternion's
+            if np.all(np.abs(norm - 1.0) <= 1e-6):
+                q /= norm[:, None]
+                return poses
+        if not all(isinstance(raw, Mapping) for raw in objects):
+            raise PrscError("scene JSON: objects: expected a list of objects")
+        return np.array([scene_position(raw.get("position"), f"object {body.obj.label!r}.position")
+                         + unit_quaternion(raw.get("quaternion"), f"object {body.obj.label!r}.quaternion")
+                         for body, raw in zip(self._bodies, objects)], dtype=float).reshape(-1, 7)
+
+    def _changed(self, scene_json: Mapping[str, Any]) -> tuple[list[int], dict[int, dict[str, Any]]] | None:
+        """The objects to parse again, and the primitives whose dimensions and mass alone changed (with
+        their signatures; an object whose image alone changed, to a known one, is switched here), or
         None when the whole scene must be read (the first, or another set of objects or params)."""
         objects = scene_json.get("objects") if isinstance(scene_json, Mapping) else None
         if (self._signatures is None or not isinstance(objects, list) or len(objects) != len(self._signatures)
                 or scene_json.get("params") != self._params):
             return None
-        changed = []
-        for k, (raw, signature) in enumerate(zip(objects, self._signatures)):
-            if not isinstance(raw, Mapping) or _signature(raw) != signature:
-                changed.append(k)
+        changed: list[int] = []
+        resized: dict[int, dict[str, Any]] = {}
+        for k, (raw, old) in enumerate(zip(objects, self._signatures)):
+            signature = _signature(raw) if isinstance(raw, Mapping) else None
+            if signature != old:
+                if signature is not None and self._shapes[k] is not None and _sized_alike(signature, old):
+                    resized[k] = signature
+                else:
+                    changed.append(k)
                 continue
             image = _image_name(raw)
             if image != self._image_names[k]:
@@ -229,7 +280,45 @@ class SharedModel:
                     continue
                 self.model.geom_matid[self._textured_geoms[k]] = material
                 self._image_names[k] = image
-        return changed
+        return changed, resized
+
+    def _resize(self, objects: list[Any], resized: Mapping[int, dict[str, Any]]) -> None:
+        """Validate and write the new dimensions and mass of primitives whose JSON changed in nothing else."""
+        where = [f"object {objects[k].get('name')!r}" for k in resized]
+        dimensions = np.array([object_dimensions(objects[k].get("dimensions"), w) for k, w in zip(resized, where)])
+        masses = np.array([object_mass(objects[k].get("mass"), w, free=not self._bodies[k].fixed)
+                           for k, w in zip(resized, where)])
+        # Its Body keeps the numbers it was resolved with: of a primitive's Body only its name and structure are read.
+        self._write_primitives(list(resized), dimensions, masses)
+        for k, signature in resized.items():
+            self._signatures[k] = signature  # type: ignore[index]
+
+    def _write_primitives(self, objects: list[int], dimensions: np.ndarray, masses: np.ndarray) -> None:
+        """Geom size and bounds, body mass and inertia of primitive `objects` of `dimensions` and `masses`
+        (rows), all of one shape at once (their geoms' pose, centre of mass and axes are the body's)."""
+        model = self.model
+        shapes = [self._shapes[k] for k in objects]
+        for shape in dict.fromkeys(shapes):
+            rows = [i for i, s in enumerate(shapes) if s == shape]
+            ids = np.array([self._primitive_id(objects[i]) for i in rows], dtype=int).reshape(-1, 2)
+            extents = primitive_extents(shape, dimensions[rows])
+            sizes = primitive_geom_sizes(shape, extents)
+            geoms, bodies = ids[:, 1], ids[:, 0]
+            model.geom_size[geoms] = sizes
+            rbound, half = _bounds(shape, sizes)
+            model.geom_rbound[geoms] = rbound
+            model.geom_aabb[geoms, :3] = 0.0
+            model.geom_aabb[geoms, 3:] = half
+            model.body_mass[bodies] = masses[rows]
+            model.body_inertia[bodies] = primitive_inertia(shape, extents, masses[rows])
+
+    def _primitive_id(self, k: int) -> tuple[int, int]:
+        """The body and geom of primitive object `k`."""
+        ids = self._primitive_ids.get(k)
+        if ids is None:
+            name = self._bodies[k].name
+            ids = self._primitive_ids[k] = (self.model.body(name).id, self.model.geom(f"{name}/{self._shapes[k]}").id)
+        return ids
 
     def _apply_objects(self, scene_json: Mapping[str, Any], changed: list[int]) -> None:
         """Parse, resolve and write only the objects in `changed` (the others are as applied last)."""
@@ -245,9 +334,10 @@ class SharedModel:
         for k, structure in zip(changed, fresh):
             objects_structure[k] = structure
         self._check(replace(self.structure, objects=tuple(objects_structure)), scene_json.get("index"))
+        self._bodies = bodies
         for k in changed:
             self._write_body(k, bodies[k], objects[k])
-        self._bodies = bodies
+        self._write_resolved_primitives(changed)
         if any(bodies[k].robot is not None for k in changed):
             self._robot_home()
 
@@ -260,10 +350,18 @@ class SharedModel:
         self._image_names = [None] * len(bodies)
         self._params = scene_json.get("params")
         self._scene = scene
+        self._bodies = list(bodies)
         for k, (body, raw) in enumerate(zip(bodies, scene_json["objects"])):
             self._write_body(k, body, raw)
-        self._bodies = list(bodies)
+        self._write_resolved_primitives(range(len(bodies)))
         self._robot_home()
+
+    def _write_resolved_primitives(self, objects: Iterable[int]) -> None:
+        """`_write_primitives` for the resolved bodies `objects` that are primitives."""
+        chosen = [k for k in objects if self._shapes[k] is not None]
+        if chosen:
+            objs = [self._bodies[k].obj for k in chosen]
+            self._write_primitives(chosen, np.array([o.dimensions for o in objs]), np.array([o.mass for o in objs]))
 
     def _check(self, structure: SceneStructure, index: Any) -> None:
         """Refuse a scene whose structure is not the model's, saying what differs."""
@@ -299,6 +397,7 @@ class SharedModel:
         obj = body.obj
         self._image_names[k] = _image_name(raw)
         self._signatures[k] = _signature(raw)
+        shape = self._shapes[k] = primitive_shape(obj)
         if body.light is not None:
             light = model.light(obj.name).id
             model.light_diffuse[light] = body.light.diffuse
@@ -307,10 +406,11 @@ class SharedModel:
             return
         b = model.body(obj.name).id
         inertial = body.inertial
-        model.body_mass[b] = inertial.mass
         model.body_ipos[b] = inertial.com
         model.body_iquat[b] = inertial.principal
-        model.body_inertia[b] = inertial.diagonal
+        if shape is None:  # a primitive's mass, inertia and geom size: `_write_primitives`
+            model.body_mass[b] = inertial.mass
+            model.body_inertia[b] = inertial.diagonal
         for part in body.parts:
             g = model.geom(f"{obj.name}/{part.name}").id
             model.geom_pos[g] = part.position
@@ -321,11 +421,12 @@ class SharedModel:
                 continue
             if part.texture is not None:
                 model.geom_matid[g] = self._material(obj.label, part.texture)
-            size = geom_size(part)
-            model.geom_size[g] = size
-            rbound, half = _bounds(part.shape, size)
-            model.geom_rbound[g] = rbound
-            model.geom_aabb[g] = np.concatenate([np.zeros(3), half])
+            if shape is None:
+                size = np.array([geom_size(part)])
+                model.geom_size[g] = size[0]
+                rbound, half = _bounds(part.shape, size)
+                model.geom_rbound[g] = rbound[0]
+                model.geom_aabb[g] = np.concatenate([np.zeros(3), half[0]])
         if any(p.texture is not None and p.shape != "mesh" for p in body.parts):
             self._materials[(k, _image_name(raw))] = self._material(obj.label, next(
                 p.texture for p in body.parts if p.texture is not None and p.shape != "mesh"))

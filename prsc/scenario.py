@@ -17,6 +17,12 @@ if TYPE_CHECKING:
     from prsc.sampling import Sampler
 
 
+RESET_DRAW_AHEAD = 16
+"""A reset loop's first draw (SceneEnv's `draw_ahead`): a seeded reset redraws this many scenes."""
+RESET_DRAW_AHEAD_MAX = 256
+"""Where a reset loop's draws stop doubling (SceneEnv's `draw_ahead_max`): the steady batch."""
+
+
 def in_memory_root() -> Path:
     """Where in-memory models find their meshes: an asset store in the build folder
     (`$PRSC_BUILD_DIR/in-memory`, beside the converted robot assets)."""
@@ -96,11 +102,12 @@ class Scenario:
 
         return map(with_body_names, self.sampler.scenes(seed, indices, start))
 
-    def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
-        """index -> scene under `seed`, as `scene` gives it, drawn `ahead` at a time where the spec batches."""
+    def drawer(self, seed: int, ahead: int = 64, grow_to: int | None = None) -> Callable[[int], dict[str, Any]]:
+        """index -> scene under `seed`, as `scene` gives it, drawn `ahead` at a time where the spec batches
+        (with `grow_to`: each draw twice the last, up to `grow_to`; `Sampler.drawer`)."""
         from prsc.backends.names import with_body_names
 
-        draw = self.sampler.drawer(seed, ahead)
+        draw = self.sampler.drawer(seed, ahead, grow_to)
         return lambda index: with_body_names(draw(index))
 
     def image_choices(self) -> dict[str, tuple[str, ...]]:

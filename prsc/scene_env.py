@@ -2,8 +2,10 @@
 written into one MuJoCo model without recompiling (docs/learning.md). Needs the [gym] extra.
 
 - `reset(seed=s)` draws scene 0 of seed s; each later `reset()` the next scene of that seed
-  (seed 0 when no seed was ever given), so a run is reproducible scene by scene; scenes are
-  drawn `draw_ahead` at a time when the spec's sampler batches;
+  (seed 0 when no seed was ever given), so a run is reproducible scene by scene; when the spec's
+  sampler batches, scenes are drawn `draw_ahead` at a time after a seeded reset, each later draw
+  twice the last up to `draw_ahead_max` (a seeded reset stays cheap, and the steady rate is that
+  of large batches; scene k is the same; a `draw_ahead_max` below `draw_ahead` keeps it fixed);
 - `step(action)` sets `data.ctrl` and steps MuJoCo `frame_skip` times; the action space is
   bounded (`action_bounds`); `max_episode_steps` steps give `truncated`;
 - the observation is `qpos` and `qvel` by default; `observation="cameras"` gives every camera
@@ -24,13 +26,15 @@ written into one MuJoCo model without recompiling (docs/learning.md). Needs the 
 
 from __future__ import annotations
 
-import copy
 import os
+import pickle
 from typing import Any, Callable, Mapping, Sequence
 
 import gymnasium
 import numpy as np
 from gymnasium import spaces
+
+from prsc.scenario import RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX
 
 SceneFunction = Callable[[dict, Any, Any], Any]
 UNBOUNDED_ACTUATOR_BOUND = 1.0
@@ -76,7 +80,8 @@ class SceneEnv(gymnasium.Env):
         render_camera: str | None = None,
         width: int = 640,
         height: int = 480,
-        draw_ahead: int = 16,
+        draw_ahead: int = RESET_DRAW_AHEAD,
+        draw_ahead_max: int = RESET_DRAW_AHEAD_MAX,
         include_dirs: Sequence[str | os.PathLike[str]] = (),
     ) -> None:
         cameras = observation is not None and not callable(observation)
@@ -119,8 +124,10 @@ class SceneEnv(gymnasium.Env):
         self._render_camera = -1 if render_camera is None else render_camera
         self._seed = 0
         self._next_index = 0
-        self._draw_ahead = draw_ahead
-        self._draw = self.scenario.drawer(self._seed, draw_ahead)
+        if draw_ahead < 1:
+            raise ValueError(f"draw_ahead must be >= 1, got {draw_ahead}")
+        self._draw_ahead = (draw_ahead, draw_ahead_max)
+        self._draw = self.scenario.drawer(self._seed, *self._draw_ahead)
         self._steps = 0
         self.scene: dict[str, Any] = {}
         # Actions are clipped to the bounds in float64 (the space's float32 bounds may round outwards).
@@ -144,14 +151,17 @@ class SceneEnv(gymnasium.Env):
         super().reset(seed=seed)
         if seed is not None:
             self._seed, self._next_index = int(seed), 0
-            self._draw = self.scenario.drawer(self._seed, self._draw_ahead)
+            self._draw = self.scenario.drawer(self._seed, *self._draw_ahead)
         self.scene = self._draw(self._next_index)
         self._next_index += 1
         self._steps = 0
         self.scenario.apply(self.scene, self.model, self.data)
         info = self._task.reset(self.scene, self.model, self.data) if self._task else {}
-        # A copy: a caller may keep or edit what it was given (Gymnasium's rule); once per episode.
-        return self._observation(), {"scene": copy.deepcopy(self.scene), **info}
+        # A copy: a caller may keep or edit what it was given (Gymnasium's rule); once per episode. The scene
+        # is JSON data: a pickle round trip copies it whole in a fifth of copy.deepcopy's time (86 against 398 us
+        # on bin_ten_parts, as much as `apply` itself).
+        copied = pickle.loads(pickle.dumps(self.scene, protocol=pickle.HIGHEST_PROTOCOL))
+        return self._observation(), {"scene": copied, **info}
 
     def step(self, action):
         """Set the controls (clipped to the action space) and step MuJoCo `frame_skip` times."""

@@ -1,7 +1,7 @@
 """`prsc bench FILE... [--json]`: every sampler side by side on each spec.
 `prsc bench --backends FILE [-n 1000] [--jobs 1,2]`: files written per second per format.
 `prsc bench --episodes FILE [-n 21] [--controller TARGET]`: CPU seconds per `prsc run` episode.
-`prsc bench --resets FILE [-n 200]`: resets per CPU-second, `scenario.apply` against a compile per scene.
+`prsc bench --resets FILE... [-n 200]`: resets per CPU-second, `scenario.apply` against a compile per scene.
 
 For each spec and sampler (exact under each law: joint, sequential, rejection; hit-and-run;
 the paper's naive baseline; for a batched spec, each exact law also one scene at a time, as
@@ -195,8 +195,7 @@ def run(args: argparse.Namespace) -> int:
     if args.resets:
         from prsc.commands.bench_resets import print_resets
 
-        for path in args.files:
-            print_resets(path, args.scenes or 200, args.include)
+        print_resets(args.files, args.scenes or 200, args.include)
         return 0
     if args.episodes:
         from prsc.commands.bench_episodes import print_episodes

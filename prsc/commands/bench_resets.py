@@ -1,11 +1,13 @@
-"""`prsc bench --resets FILE [-n 200]`: resets per CPU-second, a new scene written into one
+"""`prsc bench --resets FILE... [-n 200]`: resets per CPU-second, a new scene written into one
 shared MuJoCo model (`scenario.apply`) against a model compiled per scene
-(`prsc.mujoco_model`), side by side in one process on one core (docs/learning.md).
+(`prsc.mujoco_model`), side by side in one process on one core (docs/learning.md); with several
+files, each in turn in the same run, then one table of them all.
 
-Rows: drawing the scene alone, through `scenario.drawer` as `SceneEnv.reset` does (batched
-where the sampler batches) and one at a time through `scenario.scene`; `apply` alone and a compile alone (scenes drawn
-beforehand); draw + apply (an RL reset) and draw + compile (the path without `apply`),
-from those rates; and a 4-environment
+Rows: drawing the scene alone, through `scenario.drawer` as `SceneEnv.reset` does (its first
+draw RESET_DRAW_AHEAD scenes, each later one twice the last up to RESET_DRAW_AHEAD_MAX, over
+enough scenes that most come from full batches, the ramp included) and one at a time through
+`scenario.scene`; `apply` alone and a compile alone (scenes drawn beforehand); draw + apply (an
+RL reset) and draw + compile (the path without `apply`), from those rates; and a 4-environment
 `gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed, with
 a `SceneEnv.step` (no rendering) against the same `mujoco.mj_step` calls on its model, timed
 in alternating rounds. CPU time of this process, so other load on the machine does not count.
@@ -18,7 +20,7 @@ import time
 from typing import Any, Callable
 
 VECTOR_ENVS = 4
-DRAW_AHEAD = 16  # SceneEnv's default draw_ahead: the bench draws scenes as a reset does
+DRAWN = "draw a scene (as a reset)"
 
 
 def _rate(count: int, work: Callable[[int], Any]) -> float:
@@ -33,23 +35,24 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     """Resets per CPU-second of each way (the keys of the printed table)."""
     import mujoco
 
-    from prsc.scenario import load, mujoco_model
+    from prsc.scenario import RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX, load, mujoco_model
 
     scenario = load(spec, include_dirs)
     model = scenario.model(seed, 0)
     data = mujoco.MjData(model)
-    scenes = [scenario.scene(seed, k) for k in range(1, n + 1)]
+    scenes = list(scenario.scenes(seed, n, start=1))
     scenario.apply(scenes[-1], model, data)  # warm-up: imports and caches are set-up, not per-reset cost
     compiled = max(1, n // 10)  # compiling is ~100x slower: fewer of them measure it as well
-    # A reset draws through `scenario.drawer` (batched where the sampler batches), as SceneEnv.reset
-    # does; one scene at a time through `scenario.scene` is kept as a row to compare against.
-    draw = scenario.drawer(seed + 1, DRAW_AHEAD)
-    drawn = _rate(n, lambda k: draw(k))
+    # A reset draws through `scenario.drawer` as SceneEnv.reset does, from a seeded reset on: the
+    # ramp of small draws is in the rate, and enough scenes follow it that full batches dominate.
+    # One scene at a time through `scenario.scene` is kept as a row to compare against.
+    draw = scenario.drawer(seed + 1, RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX)
+    drawn = _rate(max(n, 4 * RESET_DRAW_AHEAD_MAX), lambda k: draw(k))
     drawn_singly = _rate(max(1, n // 4), lambda k: scenario.scene(seed, n + 1 + k))
     applied = _rate(n, lambda k: scenario.apply(scenes[k], model, data))
     compiled_rate = _rate(compiled, lambda k: mujoco_model(scenes[k]))
     rates = {
-        f"draw a scene (drawer, {DRAW_AHEAD} ahead)": drawn,
+        DRAWN: drawn,
         "draw a scene (one at a time)": drawn_singly,
         "apply (scene drawn)": applied,
         "compile (scene drawn)": compiled_rate,
@@ -97,14 +100,28 @@ def bench_steps(env, seed: int, steps: int, rounds: int = 10) -> dict[str, float
             "step cost ratio": ratio}
 
 
-def print_resets(spec: str, n: int, include_dirs: list[str]) -> None:
-    """Run the benchmark on one spec and print the table."""
-    rates = bench_resets(spec, n, include_dirs)
-    print(f"prsc reset benchmark: {spec}, {n} scenes, one core, load average {os.getloadavg()[0]:.2f}")
-    print(f"  apply is {rates['apply (scene drawn)'] / rates['compile (scene drawn)']:,.0f}x a compile per scene; "
-          f"a reset (draw + apply) {rates['draw + apply'] / rates['draw + compile']:,.1f}x")
-    ratio = rates.pop("step cost ratio", None)
-    if ratio is not None:
-        print(f"  a SceneEnv step costs {ratio:.3f}x the same mj_step calls (median of 10 rounds)")
-    for name, rate in rates.items():
-        print(f"  {name:<28} {rate:>9,.0f} per CPU-second")
+SUMMARY = (DRAWN, "apply (scene drawn)", "compile (scene drawn)", "draw + apply", "draw + compile")
+
+
+def print_resets(specs: list[str], n: int, include_dirs: list[str]) -> None:
+    """Run the benchmark on each spec in turn, print its table, then one row per spec."""
+    from prsc.scenario import RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX
+
+    summary = {}
+    for spec in specs:
+        rates = summary[spec] = bench_resets(spec, n, include_dirs)
+        print(f"prsc reset benchmark: {spec}, {n} scenes, one core, load average {os.getloadavg()[0]:.2f}")
+        print(f"  apply is {rates['apply (scene drawn)'] / rates['compile (scene drawn)']:,.0f}x a compile per scene; "
+              f"a reset (draw + apply) {rates['draw + apply'] / rates['draw + compile']:,.1f}x draw + compile, "
+              f"{rates['draw + apply'] / rates['compile (scene drawn)']:,.1f}x a compile alone")
+        print(f"  a reset draws {RESET_DRAW_AHEAD} scenes at a time, doubling to {RESET_DRAW_AHEAD_MAX}")
+        ratio = rates.pop("step cost ratio", None)
+        if ratio is not None:
+            print(f"  a SceneEnv step costs {ratio:.3f}x the same mj_step calls (median of 10 rounds)")
+        for name, rate in rates.items():
+            print(f"  {name:<28} {rate:>9,.0f} per CPU-second")
+    if len(specs) > 1:
+        print(f"all specs, per CPU-second: {' | '.join(SUMMARY)} | draw + apply / draw + compile")
+        for spec, rates in summary.items():
+            cells = " | ".join(f"{rates[name]:,.0f}" for name in SUMMARY)
+            print(f"  {spec}: {cells} | {rates['draw + apply'] / rates['draw + compile']:,.1f}x")

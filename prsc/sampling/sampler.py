@@ -175,19 +175,27 @@ class Sampler:
         """Scenes `indices` under `seed` as scene JSON, drawn at once on a batched or chunked path."""
         if self.plan.path != BATCHED:
             return [self.to_json(result, seed, index) for result, index in zip(self.results(seed, indices), indices)]
+        scene = self._batch_scenes(seed, indices)
+        return [scene(i) for i in range(len(indices))]
+
+    def _batch_scenes(self, seed: int, indices: Sequence[int]) -> Callable[[int], dict[str, Any]]:
+        """Draw scenes `indices` as one batch; i -> the JSON of the i-th, made when asked for (a drawer
+        holding many keeps a few arrays, not thousands of dicts for the garbage collector to walk)."""
         assert self._batch is not None
         state = self._batch.draw(seed, indices)
         names = [o.name for o in self._batch.plan.objects]
         positions = [state.positions[name].tolist() for name in names]
         spec, seed, classes = self.spec, int(seed), self.classes
         parts = list(zip(self.templates, positions, self._quaternions))
-        out = []
-        for i, (index, values) in enumerate(zip(indices, self._batch.params(state))):
+        values = self._batch.params(state)
+
+        def scene(i: int) -> dict[str, Any]:
             params = {"ground": True}
-            params.update({k: json_value(v) for k, v in values.items()})
+            params.update({k: json_value(v) for k, v in values[i].items()})
             objects = [placed_template(t, p[i], list(q)) for t, p, q in parts]  # type: ignore[arg-type]
-            out.append(self._with_task(scene_dict(spec, seed, int(index), params, objects, classes)))
-        return out
+            return self._with_task(scene_dict(spec, seed, int(indices[i]), params, objects, classes))
+
+        return scene
 
     def to_json(self, result: SceneResult, seed: int, index: int) -> dict[str, Any]:
         """The scene JSON of a sampled scene (for callers that also keep its statistics)."""
@@ -200,13 +208,16 @@ class Sampler:
             scene["task"] = bind_task(self.program.task, scene).to_json()
         return scene
 
-    def drawer(self, seed: int, ahead: int = 64) -> Callable[[int], dict[str, Any]]:
+    def drawer(self, seed: int, ahead: int = 64, grow_to: int | None = None) -> Callable[[int], dict[str, Any]]:
         """index -> scene JSON under `seed`; a batched or chunked path draws the next indices at once
-        and hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once."""
+        and hands them out as asked (a compile worker's chunk of consecutive scenes), each scene once.
+        With `grow_to`, each draw after the first takes twice as many as the last, up to `grow_to`
+        (a reset loop: its first scene soon, then the rate of large batches); scene k is the same."""
         path = self.plan.path
         if path != BATCHED and not self.plan.chunked:
             return functools.partial(self.scene, seed)
-        drawn: dict[int, Any] = {}  # index -> scene JSON (batched) or a candidate round's Drawn
+        drawn: dict[int, Any] = {}  # index -> how to make its scene JSON (batched), or a candidate round's Drawn
+        size = [ahead]  # how many the next draw takes
 
         def scene(index: int) -> dict[str, Any]:
             if index not in drawn:
@@ -214,18 +225,21 @@ class Sampler:
                 # Candidate rounds and sweeps take 16 ahead: a worker asked for a few scenes draws few more.
                 # Batches and Gibbs rounds take all `ahead`: their cost is numpy calls per round, not scenes.
                 wide = path in (BATCHED, GIBBS_ROUNDS)
-                chunk = range(index, index + (ahead if wide else min(ahead, 16)))
+                chunk = range(index, index + (size[0] if wide else min(size[0], 16)))
+                if grow_to is not None:
+                    size[0] = max(size[0], min(2 * size[0], grow_to))
                 # They hand over results, each made JSON (or its error raised) only when asked for: a scene
                 # that cannot be written does not take the scenes before it in the chunk with it.
                 if path == BATCHED:
-                    drawn.update(zip(chunk, self.batch(seed, chunk)))
+                    made = self._batch_scenes(seed, chunk)
+                    drawn.update((index, functools.partial(made, i)) for i, index in enumerate(chunk))
                 elif path == CANDIDATE_ROUNDS:
                     assert self._candidates is not None
                     drawn.update(zip(chunk, self._candidates.draw(seed, chunk)))
                 else:
                     drawn.update(zip(chunk, self.results(seed, chunk)))
             value = drawn.pop(index)
-            return value if path == BATCHED else self.to_json(self._settle(value, seed, index), seed, index)
+            return value() if path == BATCHED else self.to_json(self._settle(value, seed, index), seed, index)
 
         return scene
 

@@ -53,7 +53,7 @@ def _fresh_at_home(scene):
     return fresh, _at_home(fresh)
 
 
-@pytest.mark.parametrize("spec", ["table_cube", "bin_picking"])
+@pytest.mark.parametrize("spec", ["table_cube", "bin_picking", "bin_ten_parts"])
 def test_apply_gives_the_model_a_fresh_compile_gives(spec):
     # The sequential law draws bin_picking 10x faster than the joint one; apply does not care.
     scenario = Scenario(compile_sampler(REPO / "specs" / f"{spec}.prs", law="sequential"))
@@ -73,8 +73,71 @@ def test_apply_gives_the_model_a_fresh_compile_gives(spec):
         worst["xquat"] = max(worst["xquat"], float(np.max(np.abs(data.xquat - fresh_data.xquat))))
         sizes.add(model.geom_size.tobytes())
     assert {name: error for name, error in worst.items() if error > 1e-9} == {}
-    if spec == "bin_picking":
+    if spec != "table_cube":
         assert len(sizes) == SCENES  # the parts' sizes really changed from scene to scene
+
+
+def test_apply_writes_new_sizes_of_primitives_without_parsing_them(monkeypatch):
+    # bin_ten_parts: washers of random diameter and bolts of random height. After the first scene,
+    # apply neither parses nor resolves them again, and what it writes is a fresh model's.
+    import prsc.backends.shared_model as shared_model
+    from prsc.backends.scene import parse_scene
+
+    scenario = Scenario(compile_sampler(REPO / "specs" / "bin_ten_parts.prs", law="sequential"))
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    scenario.apply(scenario.scene(0, 1), model, data)
+
+    def refused(*args, **kwargs):
+        raise AssertionError("parsed or resolved again")
+
+    monkeypatch.setattr(shared_model, "parse_object", refused)
+    monkeypatch.setattr(shared_model, "resolve_body", refused)
+    monkeypatch.setattr(shared_model, "parse_scene", refused)
+    for index in (2, 3):
+        scene = scenario.scene(0, index)
+        scenario.apply(scene, model, data)
+        fresh = prsc.mujoco_model(scene)
+        for name in ("geom_size", "geom_rbound", "geom_aabb", "body_mass", "body_inertia", "body_invweight0"):
+            assert np.max(np.abs(getattr(model, name) - getattr(fresh, name))) <= 1e-9, name
+    # A bad size is refused with the scene parser's own message, and the model still takes scenes.
+    bad = copy.deepcopy(scenario.scene(0, 4))
+    bad["objects"][2]["dimensions"][0] = -0.05
+    with pytest.raises(PrscError) as refusal:
+        scenario.apply(bad, model, data)
+    with pytest.raises(PrscError) as parsed:
+        parse_scene(bad)  # the scene parser itself (imported before the patch)
+    assert refusal.value.message == parsed.value.message
+    assert "dimensions" in refusal.value.message
+    scenario.apply(scenario.scene(0, 4), model, data)
+
+
+@pytest.mark.parametrize("pose, message", [
+    (("quaternion", [1.0, 0.0, 0.0, 0.5]), "expected a unit quaternion"),
+    (("position", [0.1, True, 0.8]), "expected finite numbers"),
+    (("position", [0.1, "0.2", 0.8]), "expected finite numbers"),
+    (("position", [0.1, 0.2]), "expected a list of 3 numbers"),
+    (("quaternion", None), "expected a list of 4 numbers"),
+])
+def test_a_bad_pose_is_refused_with_the_scene_parser_s_message(pose, message):
+    # apply reads every pose at once; a pose that fails is read again one by one for the parser's message.
+    scenario = prsc.load(REPO / "specs" / "table_cube.prs")
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    bad = copy.deepcopy(scenario.scene(0, 1))
+    next(o for o in bad["objects"] if o["name"] == "c1")[pose[0]] = pose[1]
+    with pytest.raises(PrscError, match=f"scene JSON: object 'c1'.{pose[0]}: {message}"):
+        scenario.apply(bad, model, data)
+
+
+def test_plain_shape_models_are_their_primitive():
+    # The cube and cylinder assets are the object's primitive (what lets apply write them by formula).
+    from prsc.assets.registry import part_recipe
+    from prsc.backends.bodies import PLAIN_SHAPE_MODELS, primitive_part
+
+    for dimensions in ((0.05, 0.08, 0.02), (0.3, 0.1, 0.7), (0.01, 0.01, 0.01)):
+        for model, shape in PLAIN_SHAPE_MODELS.items():
+            assert part_recipe(model)(dimensions) == (primitive_part(shape, dimensions),)
 
 
 def test_a_scene_the_model_cannot_hold_is_an_error_naming_what_differs():
@@ -279,7 +342,9 @@ def test_camera_observations_are_the_spec_cameras_images():
 def test_steps_give_no_scene_and_truncate_at_max_episode_steps():
     env = prsc.SceneEnv(REPO / "specs" / "table_cube.prs", max_episode_steps=3)
     _, info = env.reset(seed=0)
-    assert info["scene"]["index"] == 0
+    assert info["scene"]["index"] == 0 and info["scene"] == env.scene
+    info["scene"]["objects"][0]["position"][0] += 1.0  # a copy: the caller's to edit
+    assert info["scene"] != env.scene
     outcomes = [env.step(env.action_space.sample()) for _ in range(3)]
     assert [truncated for *_, truncated, _ in outcomes] == [False, False, True]
     assert all("scene" not in info for *_, info in outcomes)  # the task's status only (Table-Cube states one)

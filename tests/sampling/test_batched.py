@@ -161,3 +161,18 @@ def test_a_compile_worker_s_drawer_hands_out_the_same_scenes_in_any_order(sample
     drawer = sampler.drawer(3)
     for k in (0, 1, 2, 70, 5, 5, 63, 64, 1000):
         assert drawer(k) == sampler.scene(3, k), k
+
+
+def test_a_growing_drawer_takes_twice_the_last_draw_and_gives_the_same_scenes(monkeypatch):
+    # A reset loop's drawer (SceneEnv): the first draw small, each later one twice the last up to a cap.
+    # bin_ten_parts: Gibbs rounds, which draw all of a chunk at once (as batches do).
+    sampler = Sampler(compile_program(str(REPO / "specs" / "bin_ten_parts.prs")), "exact")
+    scenes = sampler.batch(7, range(40))
+    draws: list[int] = []
+    results = sampler.results
+    monkeypatch.setattr(sampler, "results", lambda seed, chunk: draws.append(len(chunk)) or results(seed, chunk))
+    drawer = sampler.drawer(7, 2, grow_to=8)
+    assert [drawer(k) for k in range(30)] == scenes[:30]
+    assert draws == [2, 4, 8, 8, 8]
+    assert drawer(35) == scenes[35] and drawer(33) == scenes[33]  # out of order: drawn again, still scene k
+    assert draws[-2:] == [8, 8]
