@@ -8,7 +8,7 @@ spheres as UsdGeom Cube, Cylinder and Sphere) and its collision geometry as coll
 `/<robot>/joints`: revolute joints with limits in degrees and prismatic joints in metres,
 each with a drive holding the home posture (furniture: none); `root_joint` is a fixed joint from the world
 to the root link, whose world-side frame (`physics:localPos0/localRot0`) a scene sets to
-where it mounts the robot. Mimic joints (the Panda's second finger) have no UsdPhysics
+where it mounts the robot. Mimic joints (a gripper's second finger) have no UsdPhysics
 schema and are left as independent joints.
 """
 
@@ -34,9 +34,9 @@ _LINEAR_DAMPING = 20.0  # N s / m
 
 
 def _build_dir() -> Path:
-    from prsc.assets.panda import build_dir
+    from prsc.user_assets.asset_files import build_root
 
-    return build_dir()
+    return build_root() / "assets"
 
 
 def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float], drives: bool = True) -> Path:

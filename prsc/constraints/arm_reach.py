@@ -66,7 +66,7 @@ class TopDownIK:
     def __init__(self, asset: ArticulatedAsset) -> None:
         import mujoco
 
-        self.model = asset_spec(asset.source).compile()
+        self.model = asset_spec(asset.source, (), asset.fitting).compile()
         self.root_name = asset.root
         self.data = mujoco.MjData(self.model)
         self.arm = ArmFrames.of(self.model, [j.name for j in asset.joints], str(asset.tcp))

@@ -127,7 +127,8 @@ def test_reachable_by_is_uniform_on_the_table_within_the_ring_less_its_hole(tmp_
     for the law that forgets the hole (drawn the same way), so it can fail."""
     from scipy.stats import ks_2samp
 
-    from prsc.constraints.reach_rows import reach_ring
+    from prsc.constraints.arm_reach import arm_reach
+    from prsc.user_assets.asset_files import model_asset
     from prsc.constraints.reach_ring import contains
 
     spec = tmp_path / "reach.prs"
@@ -139,12 +140,12 @@ def test_reachable_by_is_uniform_on_the_table_within_the_ring_less_its_hole(tmp_
     objects = {o["name"]: o for o in scene["objects"]}
     arm, cube, table = objects["arm"], objects["cube"], objects["table"]
     rotation = quat_to_matrix(arm["quaternion"])
-    base = np.asarray(arm["position"]) - rotation[:, 2] * arm["dimensions"][2] / 2
+    base = np.asarray(arm["position"]) + rotation @ np.asarray(arm["properties"]["rootOffset"])
     half = (np.asarray(table["dimensions"][:2]) - np.asarray(cube["dimensions"][:2])) / 2
     rng = np.random.default_rng(5)
     points = np.column_stack([rng.uniform(-half, half, (200_000, 2)), np.full(200_000, cube["position"][2])])
     local = (points - base) @ rotation
-    ring = reach_ring("panda")
+    ring = arm_reach(model_asset(arm["model"])).ring
     empty = (np.array([[0.0, 0.0, 0.0]]), np.array([-1.0]))  # a cell no point is in
     no_hole = type(ring)(ring.a, ring.b, *empty, *empty)
     for law, expected in ((ring, True), (no_hole, False)):
