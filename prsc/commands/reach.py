@@ -34,7 +34,7 @@ def add_parser(sub) -> None:
     """`prsc reach ARM_FILE`: build an arm's top-down reachable cell, report its coverage, draw it."""
     parser = sub.add_parser("reach", help="build a URDF/MJCF arm's `reachable by` cell; report its coverage; draw it",
                             description=add_parser.__doc__)
-    parser.add_argument("arm", help="the arm's URDF or MJCF file, or a library arm's name (`panda`)")
+    parser.add_argument("arm", help="the arm's URDF or MJCF file, or the name of a library arm (prsc/library/NAME.json)")
     parser.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
                         help="folders where `package://` names are looked up")
     parser.add_argument("--grid", type=float, default=0.03, metavar="M",

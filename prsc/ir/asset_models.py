@@ -105,6 +105,9 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str],
             shown = str(getattr(tcp, "value", ""))
             raise PrscError(f"{obj.name}: tcp {shown!r} is no link or site of {model.value}"
                             f"{did_you_mean(shown, (*asset.links, *asset.sites))}", tcp.span)
+    if arm is not None and arm.fitting.fingers and "fingers" not in props:  # its finger links (`holds`)
+        props["fingers"] = ir.ListExpr(model.span, ir.Type.LIST, tuple(
+            ir.Const(model.span, ir.Type.STRING, finger) for finger in arm.fitting.fingers))
     static = props.get("static")
     # Fixed unless `static False`: an arm, or a URDF whose root has mass 0 (pybullet's fixed base).
     if (asset.has_joints or asset.fixed) and (static is None or static.span.path == BUILTIN_SPAN.path):

@@ -10,8 +10,8 @@ from prsc.task.task_regions import box_region
 from prsc.task.terms import Region, Task, TaskObject, TaskStatements
 
 FINGERS = "fingers"
-"""The property naming a robot's finger links in its own file (`holds`): the library's class
-states its arm's (prsc/library/tabletop.prs), a spec may state a file arm's (`with fingers [...]`)."""
+"""The property naming a robot's finger links in its own file (`holds`): a library arm's are
+the library's (prsc/library/<arm>.json), a spec may state a file arm's (`with fingers [...]`)."""
 
 
 def _interior(obj: dict[str, Any]) -> Interior | None:

@@ -1,6 +1,7 @@
 """The model library's arms (docs/assets.md, "The library's arm"): a URDF or MJCF file, found
 in an installed Python package, plus what the library adds to it, stated as data in
-`prsc/library/<name>.json`: tool sites, position servos, and a home pose.
+`prsc/library/<name>.json`: tool sites, position servos, finger pads, a home pose, and which
+links are its fingers.
 
 A `model` that names such a data file (`model: "NAME"` where prsc/library/NAME.json is one)
 is read by the same path as a user's file (asset_files.asset_spec, describe_asset): the
@@ -64,6 +65,7 @@ class Fitting:
     servos: tuple[FittedServo, ...] = ()
     grips: tuple[FittedGrip, ...] = ()
     home: tuple[tuple[str, float], ...] = ()  # joint -> value; joints not named start at 0 within their limits
+    fingers: tuple[str, ...] = ()  # the finger links (`holds`): the object's `fingers` property
 
     @property
     def digest(self) -> str:
@@ -147,5 +149,6 @@ def _read(path: str) -> LibraryArm:
                      for s in data.get("servos", ())),
         grips=tuple(FittedGrip(g["body"], tuple(g["friction"]), g["condim"], g["priority"]) for g in data.get("grips", ())),
         home=tuple((name, float(value)) for name, value in data.get("home", {}).items()),
+        fingers=tuple(data.get("fingers", ())),
     )
     return LibraryArm(Path(path).stem, Path(found.submodule_search_locations[0]) / relative, fitting)  # type: ignore[arg-type]
