@@ -202,7 +202,9 @@ def apply_mass(prim, mass: float, com, tensor: np.ndarray) -> None:
         diagonal, axes = np.linalg.eigh(tensor)
         if np.linalg.det(axes) < 0:
             axes[:, 2] *= -1.0
-    api.CreateDiagonalInertiaAttr(Gf.Vec3f(*(float(max(v, 0.0)) for v in diagonal)))
+    if not (diagonal > 0).all():  # a massless frame (a URDF's tool link): UsdPhysics wants both or neither
+        return
+    api.CreateDiagonalInertiaAttr(Gf.Vec3f(*(float(v) for v in diagonal)))
     api.CreatePrincipalAxesAttr(_quatf(axes))
 
 
