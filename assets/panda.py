@@ -43,7 +43,11 @@ def __getattr__(name: str):
 
 
 def panda_mjcf_spec():
-    """A fresh MjSpec of the library's Panda as a scene attaches it (prsc.assets.articulated)."""
+    """A fresh MjSpec of the library's Panda as a scene attaches it (prsc.assets.articulated), with
+    the scene's simulation options (prsc.assets.simulation), as the runner's IK model had them."""
     from prsc.assets.articulated import robot_model
+    from prsc.assets.simulation import set_simulation_options
 
-    return robot_model(LIBRARY_ARM).mjcf_spec()  # type: ignore[union-attr]
+    spec = robot_model(LIBRARY_ARM).mjcf_spec()  # type: ignore[union-attr]
+    set_simulation_options(spec.option)
+    return spec
