@@ -9,7 +9,8 @@ from __future__ import annotations
 from dataclasses import fields, replace
 from typing import Sequence
 
-from prsc.user_assets.asset_files import ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, names_asset, resolve_asset_file
+from prsc.user_assets.asset_files import (ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, model_asset, names_asset,
+                                          resolve_asset_file)
 from prsc.user_assets.asset_fitting import library_arm
 from prsc.user_assets.asset_links import asset_link
 from prsc.user_assets.asset_scale import scaled_asset_file
@@ -87,7 +88,7 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str],
         raise PrscError(f"{obj.name}: the library's {arm.name} takes no `scale`", props["scale"].span)
     try:
         if arm is not None:  # the library's arm: its file and what the library adds, by its name
-            asset = describe_asset(arm.file, (), arm.fitting)
+            asset = model_asset(str(model.value))
         else:
             # At a scale other than 1 the file is a scaled copy in the build folder (prsc/user_assets/asset_scale.py).
             path = scaled_asset_file(resolve_asset_file(str(model.value), folders), factor, folders)
