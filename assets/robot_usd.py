@@ -24,7 +24,7 @@ from prsc.assets.urdf_tree import Joint, RobotTree, read_urdf
 from prsc.files import atomic_path
 from prsc.geometry.rotations import matrix_to_quat
 
-RECIPE_VERSION = "3"  # 2: URDF boxes, cylinders and spheres converted too; 3: joint states
+RECIPE_VERSION = "4"  # 2: URDF boxes, cylinders and spheres converted too; 3: joint states; 4: a massless link authors no inertia
 
 # Drive gains per unit of joint motion: angular drives in USD are per degree.
 _ANGULAR_STIFFNESS = 1000.0 * math.pi / 180  # N m / deg
