@@ -89,14 +89,11 @@ casestudy-check: casestudy
 clean:
 	rm -rf build out site .pytest_cache
 
-# `reachable by`: regenerate the Panda's top-down reachable set from its IK (~11 min on 2 cores), measure
-# what it keeps of the true reach and of a tray, check its edge; then the 200-episode demonstration (docs/sampling.md).
+# `reachable by`: the library arm's top-down reach ring (built by the one builder, cached in the build folder),
+# what it keeps of the true reach, and its edge checked against the IK; then the 200-episode demonstration (docs/assets.md).
 .PHONY: reach reach-demo
 reach: $(STAMP)
-	$(PY) -m prsc.commands.reach --jobs 2
-	$(PY) -m prsc.commands.reach --coverage --jobs 2
-	$(PY) -m prsc.commands.reach --tray-report specs/table_cube_reach.prs --jobs 2
-	$(PY) -m prsc.commands.reach --edge-check --jobs 2
+	$(PRSC) reach panda --edge-check
 reach-demo: $(STAMP)
 	$(PRSC) run specs/table_cube_reach.prs -n 200 --seed 0 --jobs 2 -o out/reach
 

@@ -1,5 +1,6 @@
-"""Articulated assets as the backends mount them: the built-in Panda and the user's own
-URDF or MJCF files (docs/assets.md) behind one frozen `RobotModel`.
+"""Articulated assets as the backends mount them: the user's own URDF or MJCF files and the
+model library's arms (a file and what the library adds to it; docs/assets.md) behind one
+frozen `RobotModel`.
 
 Every format reads the same two sources: an MJCF tree to attach (`mjcf_spec`) and a URDF
 with absolute mesh paths (`urdf`) that the URDF, SDF and USD writers convert. A user's
@@ -16,8 +17,9 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.assets.urdf_tree import RobotTree, read_urdf
-from prsc.user_assets.asset_files import (FORWARD_YAW, ArticulatedAsset, AssetJoint, asset_spec, describe_asset, file_spec,
-                                          names_asset_file, resolve_asset_file)
+from prsc.user_assets.asset_files import (FORWARD_YAW, ArticulatedAsset, AssetJoint, asset_spec, build_root, describe_asset,
+                                          file_spec, names_asset_file, resolve_asset_file)
+from prsc.user_assets.asset_fitting import Fitting, library_arm
 from prsc.errors import PrscError
 
 GRAVITY_COMPENSATION_DAMPING = 2.0
@@ -37,26 +39,24 @@ SERVO_ARMATURE = 0.01
 class RobotModel:
     """One articulated asset as every backend and the runner mount it."""
 
-    key: str  # names its folders in asset stores and its USD prim: "panda" or "<stem>-<hash>"
-    source: str  # the file it comes from (the Panda: its converted MJCF)
+    key: str  # names its folders in asset stores and its USD prim: "<stem>-<hash>"
+    source: str  # the file it comes from
     folders: tuple[str, ...]  # where `package://` folders are looked up
     joints: tuple[AssetJoint, ...]  # in qpos order
     base_yaw: float  # yaw (rad, about +z) from the URDF's axes to the object's (the MJCF spec is turned already)
-    root_offset: tuple[float, float, float] | None  # root frame from the box centre; None: bottom centre
+    root_offset: tuple[float, float, float]  # root frame from the box centre, at the file's home
     root: str  # the root link (body)
     tcp: str | None  # tool site or body
     servo_joints: tuple[str, ...]  # joints the file's own position servos hold; prsc gives the others servos
     passive: bool = False  # not a robot (no `tcp`: a cabinet): joints only damped, no servos, no gravity compensation
+    fitting: Fitting | None = None  # what the model library adds to the file (a library arm)
 
     def mount_position(self, dimensions: tuple[float, float, float],
                        placed: Sequence[float] | None = None) -> tuple[float, float, float]:
         """The root frame in the object's (box centre) frame: `placed`, where the IR put it in the
-        object's box (its `rootOffset`, at the object's joint values), else the file's at home,
-        else (the Panda) the box's bottom centre."""
+        object's box (its `rootOffset`, at the object's joint values), else the file's at home."""
         if placed is not None:
             return tuple(float(v) for v in placed)  # type: ignore[return-value]
-        if self.root_offset is None:
-            return (0.0, 0.0, -dimensions[2] / 2)
         return self.root_offset
 
     def home(self, joints: dict[str, float] | None = None) -> dict[str, float]:
@@ -67,11 +67,7 @@ class RobotModel:
 
     def mjcf_spec(self):
         """A fresh MjSpec of the asset (world body -> root), ready to attach."""
-        if self.key == "panda":
-            from prsc.assets.panda import panda_mjcf_spec
-
-            return panda_mjcf_spec()
-        spec = asset_spec(self.source, self.folders)
+        spec = asset_spec(self.source, self.folders, self.fitting)
         for key in list(spec.keys):  # keyframes belong to the scene, which writes its own `home`
             spec.delete(key)
         # MuJoCo does not filter contacts between a child and a parent welded to the world
@@ -115,7 +111,7 @@ class RobotModel:
 
     def _touching_at_home(self, spec) -> list[tuple[str, str]]:
         """Pairs of the asset's bodies in contact at its home pose: a file whose home folds one
-        link onto another (dm_control's Jaco, robosuite's Panda) would push them apart for ever,
+        link onto another (dm_control's Jaco; robosuite's Franka arm) would push them apart for ever,
         so such pairs do not collide, as its own simulator's self-collision filters have it."""
         import mujoco
 
@@ -144,26 +140,11 @@ class RobotModel:
         return _urdf_path(self)
 
 
-@lru_cache(maxsize=1)
-def _panda() -> RobotModel:
-    """The built-in Panda: its converted MJCF (home keyframe included), mounted at the
-    bottom centre of the Robot box and yawed so that it reaches along +y."""
-    from dataclasses import replace
-
-    from prsc.assets.panda import ARM_JOINTS, HOME_QPOS, PANDA_BASE_YAW, panda_mjcf_path
-
-    asset = describe_asset(panda_mjcf_path())
-    exact = dict(zip(ARM_JOINTS, HOME_QPOS))  # the keyframe's text rounds them to 6 digits
-    joints = tuple(replace(j, home=exact.get(j.name, j.home)) for j in asset.joints)
-    return RobotModel("panda", asset.source, (), joints, PANDA_BASE_YAW, None, "base", "tcp",
-                      tuple(j.name for j in joints))
-
-
 @lru_cache(maxsize=64)
-def _file_model(path: str, folders: tuple[str, ...], passive: bool) -> RobotModel:
-    asset: ArticulatedAsset = describe_asset(path, folders)
+def _file_model(path: str, folders: tuple[str, ...], passive: bool, fitting: Fitting | None = None) -> RobotModel:
+    asset: ArticulatedAsset = describe_asset(path, folders, fitting)
     return RobotModel(asset.key, asset.source, folders, asset.joints, FORWARD_YAW, asset.root_offset, asset.root,
-                      asset.tcp, asset.servo_joints, passive and not asset.actuators)
+                      asset.tcp, asset.servo_joints, passive and not asset.actuators, fitting)
 
 
 def robot_model(model: str | None, folders: Sequence[str] = (), passive: bool = False) -> RobotModel | None:
@@ -173,9 +154,8 @@ def robot_model(model: str | None, folders: Sequence[str] = (), passive: bool = 
         return None
     if names_asset_file(model):
         return _file_model(str(resolve_asset_file(model, folders)), tuple(folders), passive)
-    from prsc.assets.registry import is_robot
-
-    return _panda() if is_robot(model) == "panda" else None
+    arm = library_arm(model)
+    return None if arm is None else _file_model(str(arm.file), (), passive, arm.fitting)
 
 
 CONVERSION_VERSION = "5"  # 5: keyed by every file the asset reads, its meshes copied into its folder
@@ -183,17 +163,11 @@ CONVERSION_VERSION = "5"  # 5: keyed by every file the asset reads, its meshes c
 
 
 def _build_folder(model: RobotModel) -> Path:
-    from prsc.assets.panda import build_dir
-
-    return build_dir() / f"{model.key}-v{CONVERSION_VERSION}"
+    return build_root() / "assets" / f"{model.key}-v{CONVERSION_VERSION}"
 
 
 @lru_cache(maxsize=64)
 def _urdf_path(model: RobotModel) -> Path:
-    if model.key == "panda":
-        from prsc.assets.panda import panda_urdf_path
-
-        return panda_urdf_path()
     import xml.etree.ElementTree as ET
 
     from prsc.user_assets.asset_cache import bundle_urdf, entry_usable, write_entry

@@ -12,9 +12,9 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-from prsc.assets.panda import build_dir
 from prsc.errors import PrscError
 from prsc.files import atomic_write_tree
+from prsc.user_assets.asset_files import build_root
 from prsc.user_assets.mesh_paths import load_mesh, obj_text
 
 SETTINGS = {"threshold": 0.05, "preprocess_mode": "auto", "max_convex_hull": -1, "seed": 0}
@@ -47,7 +47,7 @@ def convex_pieces(source: Path) -> tuple[Path, ...]:
 
     digest = hashlib.sha256(repr((version("coacd"), sorted(SETTINGS.items()))).encode())
     digest.update(Path(source).read_bytes())
-    target = build_dir() / "convex" / f"{Path(source).stem}-{digest.hexdigest()[:12]}"
+    target = build_root() / "assets" / "convex" / f"{Path(source).stem}-{digest.hexdigest()[:12]}"
     if not target.is_dir():
         files = _decompose(Path(source))
         if not target.is_dir():  # another worker may have finished first: keep its set

@@ -1,8 +1,8 @@
 """Asset registry: model name -> recipe fitting the asset to an object's box.
 
 Part assets are lists of primitives (prsc.assets.parts.Part) in the object's box frame;
-robot assets (the Panda) are articulated models that each backend mounts at the bottom
-centre of the object's box. Names are matched case- and separator-insensitively, so the
+robot assets are the model library's arms (prsc/user_assets/asset_fitting.py), read from
+their files as any URDF is (prsc.assets.articulated). Names are matched case- and separator-insensitively, so the
 original ProbRobScene `model_name "DiningChair"` finds `diningchair` (alias `chair`).
 """
 
@@ -19,6 +19,7 @@ from prsc.assets.parts import Part
 from prsc.assets.solids import bottle_parts, cube_parts, cylinder_parts
 from prsc.assets.table import table_parts
 from prsc.geometry.container import ASSET_INTERIORS, asset_interior
+from prsc.user_assets.asset_fitting import library_arm
 
 Recipe = Callable[[tuple[float, float, float]], tuple[Part, ...]]
 
@@ -43,8 +44,6 @@ PART_ASSETS: dict[str, Recipe] = {model: functools.lru_cache(maxsize=256)(recipe
 }.items()}
 """Rigid assets built from primitives, by normalised model name."""
 
-ROBOT_ASSETS: tuple[str, ...] = ("panda",)
-"""Articulated robot models the backends know how to mount."""
 
 
 @functools.lru_cache(maxsize=1024)
@@ -63,7 +62,7 @@ def is_robot(model: str | None) -> str | None:
     if model is None:
         return None
     key = normalise_model(model)
-    return key if key in ROBOT_ASSETS else None
+    return key if library_arm(key) is not None else None
 
 
 def is_hollow(model: str | None) -> bool:

@@ -8,7 +8,7 @@ spheres as UsdGeom Cube, Cylinder and Sphere) and its collision geometry as coll
 `/<robot>/joints`: revolute joints with limits in degrees and prismatic joints in metres,
 each with a drive holding the home posture (furniture: none); `root_joint` is a fixed joint from the world
 to the root link, whose world-side frame (`physics:localPos0/localRot0`) a scene sets to
-where it mounts the robot. Mimic joints (the Panda's second finger) have no UsdPhysics
+where it mounts the robot. Mimic joints (a gripper's second finger) have no UsdPhysics
 schema and are left as independent joints.
 """
 
@@ -24,7 +24,7 @@ from prsc.assets.urdf_tree import Joint, RobotTree, read_urdf
 from prsc.files import atomic_path
 from prsc.geometry.rotations import matrix_to_quat
 
-RECIPE_VERSION = "3"  # 2: URDF boxes, cylinders and spheres converted too; 3: joint states
+RECIPE_VERSION = "4"  # 2: URDF boxes, cylinders and spheres converted too; 3: joint states; 4: a massless link authors no inertia
 
 # Drive gains per unit of joint motion: angular drives in USD are per degree.
 _ANGULAR_STIFFNESS = 1000.0 * math.pi / 180  # N m / deg
@@ -34,9 +34,9 @@ _LINEAR_DAMPING = 20.0  # N s / m
 
 
 def _build_dir() -> Path:
-    from prsc.assets.panda import build_dir
+    from prsc.user_assets.asset_files import build_root
 
-    return build_dir()
+    return build_root() / "assets"
 
 
 def robot_usd_cached(robot: str, urdf_path: Path, home: dict[str, float], drives: bool = True) -> Path:
@@ -202,7 +202,9 @@ def apply_mass(prim, mass: float, com, tensor: np.ndarray) -> None:
         diagonal, axes = np.linalg.eigh(tensor)
         if np.linalg.det(axes) < 0:
             axes[:, 2] *= -1.0
-    api.CreateDiagonalInertiaAttr(Gf.Vec3f(*(float(max(v, 0.0)) for v in diagonal)))
+    if not (diagonal > 0).all():  # a massless frame (a URDF's tool link): UsdPhysics wants both or neither
+        return
+    api.CreateDiagonalInertiaAttr(Gf.Vec3f(*(float(v) for v in diagonal)))
     api.CreatePrincipalAxesAttr(_quatf(axes))
 
 

@@ -50,7 +50,7 @@ class Body:
     obj: SceneObject
     parts: tuple[Part, ...]  # empty for a robot: the robot model is its geometry
     inertial: Inertial  # MOUNT_INERTIAL for a robot (its links carry their own)
-    robot: RobotModel | None  # an articulated asset: the Panda or the user's URDF/MJCF
+    robot: RobotModel | None  # an articulated asset: a URDF/MJCF file (the user's or a library arm's)
     camera: CameraSpec | None
 
     @property

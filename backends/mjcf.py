@@ -3,11 +3,9 @@
 Layout (names the runner relies on):
 - a body per object named after it, at the scene pose (box centre); a free object has a
   free joint of the same name; geoms are named `<object>/<part>`;
-- an articulated asset (the Panda, a user's URDF or MJCF: prsc/assets/articulated.py)
-  attached with prefix `<object>/`, its root body where the asset mounts it (the Panda's
-  `<object>/base` at the bottom centre of the box, so `r1/base`, `r1/joint1`, `r1/tcp`,
-  actuators `r1/joint1..7`, `r1/gripper`; a file's root where the file puts it in its
-  box). The offset is the root body's own `pos`, not a `<frame>`: Drake's MuJoCo parser skips frames, and with them the whole robot;
+- an articulated asset (a user's URDF or MJCF, or a library arm: prsc/assets/articulated.py)
+  attached with prefix `<object>/`, its root body where the file puts it in its box (so
+  `r1/<root>`, `r1/<joint>`, `r1/tcp`, actuators `r1/<joint>` and the library's own). The offset is the root body's own `pos`, not a `<frame>`: Drake's MuJoCo parser skips frames, and with them the whole robot;
 - a camera object: a camera named after the object looking along the object's +y
   (image up = its +z) with the object's fovy and resolution;
 - a keyframe `home`: free bodies at their scene poses, robot joints at the scene's `joints`

@@ -38,7 +38,7 @@ def _folder_key(folder: str) -> str:
     """`<folder name>-<hash of its files' names and contents>`: equal folders, equal keys.
 
     Another process's half-written temporaries are not the folder's files: counted, they would
-    give a process that hashed the Panda's meshes while another was writing them a key of its
+    give a process that hashed a robot's meshes while another was writing them a key of its
     own for the whole session (the key is cached), so its scenes would name other mesh folders
     than a fresh process's (the likely cause of one CI failure in test_ray, 2026-11-26)."""
     from prsc.user_assets.asset_cache import read_input

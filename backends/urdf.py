@@ -6,9 +6,9 @@ the object and sits at the object's box centre; `scene.json` lists, per object, 
 arguments of `pybullet.loadURDF(urdf, base_position, base_orientation_xyzw,
 useFixedBase=use_fixed_base)` (the pose is the root link frame: the scene pose exactly).
 
-A Robot with model "panda" is the converted Panda URDF under a root link `<object>` with a
-fixed joint `<object>_mount` to `link0` at the bottom centre of the box, yawed by
-PANDA_BASE_YAW so the arm reaches along the object's +y. A camera object carries its
+A robot (an asset from a file, the library's arms too) is its URDF under a root link `<object>`
+with a fixed joint `<object>_mount` to its root link where the file puts it in the box, yawed
+by the asset's base_yaw so the arm reaches along the object's +y. A camera object carries its
 intrinsics in `scene.json` and a Gazebo `<sensor type="camera">` extension.
 """
 
@@ -107,7 +107,7 @@ def _robot_body_text(robot: RobotModel, store_root: str, store_from_bundle: str)
     store = AssetStore(store_root)
     root = ET.parse(robot.urdf).getroot()
     for mesh in root.iter("mesh"):
-        source = robot.urdf.parent / mesh.get("filename")  # relative to the URDF (or absolute: the Panda's)
+        source = robot.urdf.parent / mesh.get("filename")  # relative to the URDF (or absolute)
         inside = relative_path(store.robot_file(robot.key, source), store.root)
         mesh.set("filename", f"{store_from_bundle}/{inside}")
     return ("\n".join(element_text(child) for child in root),)

@@ -14,8 +14,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 SPEC = """from tabletop import *
 table = Table on Vector3D(0, 0, 0)
+arm = Robot on (top back table).position
 cube = Cube completely on table
-"""
+"""  # the library's Robot: its data (prsc/library/panda.json) ships in the wheel
 
 
 def test_the_installed_wheel_compiles_a_spec_that_imports_the_model_library(tmp_path):

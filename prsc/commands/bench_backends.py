@@ -1,7 +1,7 @@
 """`prsc bench --backends SPEC`: files written per second per format (`make bench`).
 
 Each run is `prsc compile` end to end (sampling, rendering, atomic writes, manifest) into a
-fresh temporary folder; the asset store (Panda meshes) is warmed first so runs measure
+fresh temporary folder; the asset store (robot meshes) is warmed first so runs measure
 steady-state throughput. Prints one line per format and job count.
 """
 
@@ -28,7 +28,7 @@ def bench(spec: str, n: int, jobs: list[int], targets: list[str], include_dirs: 
     rows = []
     with tempfile.TemporaryDirectory(prefix="prsc-bench-") as tmp:
         warm = Path(tmp) / "warm"
-        # Fill the build cache (Panda conversions) and check the spec compiles.
+        # Fill the build cache (robot conversions) and check the spec compiles.
         root = compile_scenes(spec, list(TARGETS), 1, 0, str(warm), include_dirs=list(include_dirs))
         for target in targets:
             for j in jobs:

@@ -28,12 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.user_assets.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, turned
+from prsc.user_assets.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, random_starts, reach_top_down, turned
 from prsc.user_assets.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "9"  # 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK (prsc/user_assets/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "10"  # 10: a pose that puts a link into another is no reach; the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK (prsc/user_assets/arm_ik.py), the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
@@ -49,6 +49,8 @@ EDGE_TOLERANCE = 0.01  # m an added ray's run may fall short of its reached neig
 # xArm6, the KUKA iiwa and the tests' MJCF arm, 2026-11-26; docs/assets.md).
 MARGIN = 0.003
 INNER_MARGIN = 0.005
+INNER_CHECK = 0.005  # m steps outwards from an inner end a controller's IK does not find
+SELF_PENETRATION = 0.005  # m two of the arm's links may overlap in a reached pose (neighbours' meshes touch)
 
 
 @dataclass(frozen=True)
@@ -66,7 +68,7 @@ class TopDownIK:
     def __init__(self, asset: ArticulatedAsset) -> None:
         import mujoco
 
-        self.model = asset_spec(asset.source).compile()
+        self.model = asset_spec(asset.source, (), asset.fitting).compile()
         self.root_name = asset.root
         self.data = mujoco.MjData(self.model)
         self.arm = ArmFrames.of(self.model, [j.name for j in asset.joints], str(asset.tcp))
@@ -75,12 +77,37 @@ class TopDownIK:
         mujoco.mj_kinematics(self.model, self.data)
         self.root = self.data.xpos[self.model.body(asset.root).id].copy()
         self.heading = self.arm.heading(self.data, self.root)  # where the tool points at home
+        self.touching = self._contacts(-math.inf)  # pairs in contact at home: the file's own, not a collision
+
+    def _contacts(self, deeper_than: float) -> set[tuple[int, int]]:
+        """The pairs of the arm's bodies whose colliding geoms overlap by more than `deeper_than` (m)."""
+        import mujoco
+
+        mujoco.mj_fwdPosition(self.model, self.data)
+        bodies = self.model.geom_bodyid
+        return {tuple(sorted((int(bodies[c.geom1]), int(bodies[c.geom2])))) for c in self.data.contact[:self.data.ncon]
+                if -c.dist > deeper_than and bodies[c.geom1] and bodies[c.geom2]}  # type: ignore[misc]
+
+    def collides(self, q: np.ndarray) -> bool:
+        """Whether the pose puts one of the arm's links into another (beside the base the IK
+        otherwise puts the tool on a point with the hand inside the base)."""
+        self.data.qpos[self.arm.qpos] = q
+        return bool(self._contacts(SELF_PENETRATION) - self.touching)
 
     def reaches(self, point: np.ndarray, seed: np.ndarray, restarts: int = 0) -> tuple[np.ndarray, bool]:
         """Whether the tool reaches the point (root frame) and the approach above it, top-down,
         from `seed`, else from home turned towards the point (and that bent), else from `restarts` more."""
         home = self.turned(math.atan2(point[1], point[0]))
-        return reach_top_down(self.model, self.data, self.arm, point + self.root, seed, home, APPROACH, restarts)
+        goal = point + self.root
+        q, ok = reach_top_down(self.model, self.data, self.arm, goal, seed, home, APPROACH, restarts)
+        if not ok or not self.collides(q):
+            return q, ok
+        # The first pose found puts a link into another: each start in turn may find one that does not.
+        for start in (*(home + bend for bend in (0.5, -0.5)), *random_starts(self.arm, home, max(restarts, RESTARTS))):
+            q, ok = reach_top_down(self.model, self.data, self.arm, goal, start, home, APPROACH)
+            if ok and not self.collides(q):
+                return q, True
+        return seed, False
 
     def turned(self, azimuth: float) -> np.ndarray:
         """Home with the first joint turned so that the tool heads towards `azimuth`."""
@@ -109,11 +136,12 @@ def _ray_point(angle: float, radius: float, height: float) -> np.ndarray:
     return np.array([radius * math.cos(angle), radius * math.sin(angle), height])
 
 
-def _bisect(ik: TopDownIK, angle: float, height: float, inside: float, outside: float, q: np.ndarray) -> float:
+def _bisect(ik: TopDownIK, angle: float, height: float, inside: float, outside: float, q: np.ndarray,
+            restarts: int = 0) -> float:
     """The reached radius nearest the boundary between `inside` (reached from q) and `outside`."""
     for _ in range(REFINE):
         mid = (inside + outside) / 2
-        q_mid, ok = ik.reaches(_ray_point(angle, mid, height), q)
+        q_mid, ok = ik.reaches(_ray_point(angle, mid, height), q, restarts)
         if ok:
             inside, q = mid, q_mid
         else:
@@ -159,13 +187,17 @@ def _ray(ik: TopDownIK, angle: float, height: float) -> tuple[float, float] | No
     run, first_q, last_q = max(runs, key=lambda found: found[0][-1] - found[0][0])
     outer = _bisect(ik, angle, height, run[-1], run[-1] + STEP, last_q)
     inner, q = run[0], first_q
-    while inner - STEP / 2 > 0:
-        q_new, ok = ik.reaches(_ray_point(angle, inner - STEP / 2, height), q)
+    while inner - STEP / 2 > 0:  # inwards too, the run ends only where RESTARTS more starts fail
+        q_new, ok = ik.reaches(_ray_point(angle, inner - STEP / 2, height), q, RESTARTS)
         if not ok:
             break
         inner, q = inner - STEP / 2, q_new
     if inner - STEP / 2 > 0:
-        inner = _bisect(ik, angle, height, inner, inner - STEP / 2, q)
+        inner = _bisect(ik, angle, height, inner, inner - STEP / 2, q, RESTARTS)
+    # The inner end as a controller seeks a pose (from home turned towards the point, then
+    # RESTARTS more): one found only by walking inwards from the last solution it does not find.
+    while inner < run[0] and not ik.reaches_from_home(_ray_point(angle, inner, height)):
+        inner = min(inner + INNER_CHECK, run[0])
     return inner, outer
 
 

@@ -9,7 +9,9 @@ from __future__ import annotations
 from dataclasses import fields, replace
 from typing import Sequence
 
-from prsc.user_assets.asset_files import ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, names_asset_file, resolve_asset_file
+from prsc.user_assets.asset_files import (ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, model_asset, names_asset,
+                                          resolve_asset_file)
+from prsc.user_assets.asset_fitting import library_arm
 from prsc.user_assets.asset_links import asset_link
 from prsc.user_assets.asset_scale import scaled_asset_file
 from prsc.user_assets.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
@@ -18,6 +20,7 @@ from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN, joint_name, joint_property
 from prsc.ir.checks import SIZES
 from prsc.ir.format import format_expr
+from prsc.ir.models import model_of
 from prsc.ir.program import ClassDef, ObjectDecl, Program
 from prsc.ir.scope import did_you_mean
 from prsc.ir.walk import rebuild, walk
@@ -80,14 +83,20 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str],
     boxed as the object is."""
     props = dict(obj.properties)
     factor = _scale_of(obj, props.get("scale"))
+    arm = library_arm(model.value)
+    if arm is not None and factor != 1.0:
+        raise PrscError(f"{obj.name}: the library's {arm.name} takes no `scale`", props["scale"].span)
     try:
-        # At a scale other than 1 the file is a scaled copy in the build folder (prsc/user_assets/asset_scale.py).
-        path = scaled_asset_file(resolve_asset_file(str(model.value), folders), factor, folders)
-        asset = describe_asset(path, folders)
+        if arm is not None:  # the library's arm: its file and what the library adds, by its name
+            asset = model_asset(str(model.value))
+        else:
+            # At a scale other than 1 the file is a scaled copy in the build folder (prsc/user_assets/asset_scale.py).
+            path = scaled_asset_file(resolve_asset_file(str(model.value), folders), factor, folders)
+            asset = describe_asset(path, folders)
+            # Found once, here: every later stage and the backends read the file this names.
+            props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
     except PrscError as error:
         raise PrscError(f"{obj.name}: {error.message}", model.span) from None
-    # Found once, here: every later stage and the backends read the file this names.
-    props["model"] = ir.Const(model.span, ir.Type.STRING, str(path))
     tcp = props.get("tcp")
     if asset.has_joints and (tcp is not None or "Robot" in obj.class_chain):
         # A robot: the scene says so by its tool frame (a Robot subclass always has one).
@@ -97,6 +106,9 @@ def _fitted(obj: ObjectDecl, model: ir.Const, folders: Sequence[str],
             shown = str(getattr(tcp, "value", ""))
             raise PrscError(f"{obj.name}: tcp {shown!r} is no link or site of {model.value}"
                             f"{did_you_mean(shown, (*asset.links, *asset.sites))}", tcp.span)
+    if arm is not None and arm.fitting.fingers and "fingers" not in props:  # its finger links (`holds`)
+        props["fingers"] = ir.ListExpr(model.span, ir.Type.LIST, tuple(
+            ir.Const(model.span, ir.Type.STRING, finger) for finger in arm.fitting.fingers))
     static = props.get("static")
     # Fixed unless `static False`: an arm, or a URDF whose root has mass 0 (pybullet's fixed base).
     if (asset.has_joints or asset.fixed) and (static is None or static.span.path == BUILTIN_SPAN.path):
@@ -163,6 +175,15 @@ def _library_cabinet(obj: ObjectDecl, model: ir.Const) -> ObjectDecl:
     return replace(obj, properties=tuple(props.items()))
 
 
+def _named_arm(obj: ObjectDecl) -> ir.Const | None:
+    """A library arm named without `model`: by the compat `model_name` or the class's name."""
+    constants = {name: value.value for name, value in obj.properties if isinstance(value, ir.Const)}
+    name = model_of(constants, obj.class_name)
+    if library_arm(name) is None:
+        return None
+    return ir.Const((obj.prop("model_name") or obj).span, ir.Type.STRING, name)
+
+
 def _linked(obj: ObjectDecl, assets: dict[str, ArticulatedAsset], folders: Sequence[str]) -> ObjectDecl:
     """`obj` with every `X.links["NAME"]` in its specifiers read from X's file (or an error there)."""
 
@@ -198,11 +219,11 @@ def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Pro
     assets: dict[str, ArticulatedAsset] = {}
     for obj in program.objects:
         obj = _linked(obj, assets, folders)  # a link's object comes earlier (it depends on it)
-        model = obj.prop("model")
+        model = obj.prop("model") or _named_arm(obj)
         if isinstance(model, ir.Const) and model.value == LIBRARY_NAME:
             obj = _library_cabinet(obj, model)
             model = obj.prop("model")
-        if isinstance(model, ir.Const) and names_asset_file(model.value):
+        if isinstance(model, ir.Const) and names_asset(model.value):
             obj, assets[obj.name] = _fitted(obj, model, folders, classes)
         else:
             _no_file_joints(obj)

@@ -54,6 +54,8 @@ def format_expr(expr: ir.Expr) -> str:
     if isinstance(expr, ir.Const):
         if expr.type == ir.Type.STRING:
             return '"' + str(expr.value).replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(expr.value, (tuple, list)):  # a constant vector (a file asset's rootOffset)
+            return "Vector3D(" + ", ".join(format_number(float(v)) for v in expr.value) + ")"
         return format_number(expr.value) if not isinstance(expr.value, bool) else str(expr.value)
     if isinstance(expr, ir.VectorExpr):
         return f"Vector3D({format_expr(expr.x)}, {format_expr(expr.y)}, {format_expr(expr.z)})"

@@ -10,10 +10,12 @@ from __future__ import annotations
 from typing import Any, Mapping
 
 from prsc.user_assets.asset_files import names_asset_file
+from prsc.user_assets.asset_fitting import library_arm_names
 from prsc.errors import PrscError
 
-KNOWN_MODELS = frozenset({"panda", "tray", "table", "cube", "cylinder", "bowl", "cup", "camera"})
-"""Asset names the backends know that a class of the same name uses without saying so (docs/scene-json.md)."""
+KNOWN_MODELS = frozenset({"tray", "table", "cube", "cylinder", "bowl", "cup", "camera"}) | library_arm_names()
+"""Asset names the backends know that a class of the same name uses without saying so (docs/scene-json.md):
+the part assets above and the model library's arms."""
 
 
 def model_of(props: Mapping[str, Any], class_name: str) -> str | None:

@@ -2,7 +2,7 @@
 
 A MuJoCo render context (MjrContext) holds what the GPU side needs of a model: its
 meshes, textures, height fields, skins and materials' textures, plane grids, buffer
-sizes. Uploading the Panda's meshes costs about 0.1 CPU s, so a worker keeps the context
+sizes. Uploading an arm's meshes costs about 0.1 CPU s, so a worker keeps the context
 of the last model and hands it to the next model with the same render assets and the same
 `context_inputs` (the numbers a context bakes in: stat.extent sets the ground's grid, the
 shadow clip and the fog). The images are the same bits a fresh context renders

@@ -169,10 +169,7 @@ def _outside_test(rule: Any, name: str, decls: dict[str, Any], placed: Placed) -
 
     def outside(state) -> np.ndarray:
         rotation, position = state.rotations[robot.name], state.positions[robot.name]
-        if offset is not None:
-            base = position + np.einsum("nij,j->ni", rotation, offset)
-        else:  # the Panda's base: the bottom centre of its box
-            base = position - rotation[:, :, 2] * state.dims[robot.name][:, 2:3] * 0.5
+        base = position + np.einsum("nij,j->ni", rotation, offset)
         local = np.einsum("nji,nj->ni", rotation, state.positions[name] - base)  # R^T (p - base)
         # Inside the interior: strictly inside every row (the sampler keeps the boundary).
         return ~np.all(local @ a_local.T < b_local - 1e-9, axis=1)

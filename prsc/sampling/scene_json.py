@@ -1,7 +1,6 @@
 """Scene JSON (`prsc-scene` version 1, docs/scene-json.md) from a sampled scene.
 
-Maps the compat properties: model_name "Panda" -> model "panda" (fixed base),
-"Camera" -> a camera object, "Tray"/"Table"/... -> lower-case model names; shape_type
+Maps the compat properties: model_name "Camera" -> a camera object, "Tray"/"Table"/... -> lower-case model names; shape_type
 'CUBOID' -> "box", 'CYLINDER' -> "cylinder"; colours by name, grey level string or list
 -> rgba; mass by default 500 kg/m^3 times the box volume.
 """
@@ -22,10 +21,9 @@ from prsc.limits import mass_problem, size_problem
 
 FORMAT = "prsc-scene"
 VERSION = 1
-ROBOT_MODELS = frozenset({"panda"})
-# Models fixed in the world unless the spec says `static False`: robot arms are mounted,
-# cameras stay where they were sampled, tables are furniture.
-STATIC_MODELS = ROBOT_MODELS | {"camera", "table"}
+# Models fixed in the world unless the spec says `static False`: cameras stay where they were
+# sampled, tables are furniture (an arm, read from a file, is fixed by the IR: ir/asset_models.py).
+STATIC_MODELS = frozenset({"camera", "table"})
 SHAPES = {"cuboid": "box", "box": "box", "cylinder": "cylinder", "sphere": "sphere", "mesh": "mesh"}
 DEFAULT_CAMERA = {"fovy": 60.0, "resolution": [640, 480]}
 DEFAULT_COLOR = (0.5, 0.5, 0.5, 1.0)

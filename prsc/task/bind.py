@@ -9,9 +9,9 @@ from prsc.geometry.container import Interior, asset_interior, declared_interior
 from prsc.task.task_regions import box_region
 from prsc.task.terms import Region, Task, TaskObject, TaskStatements
 
-ROBOT_FINGERS = {"panda": ("leftfinger", "rightfinger")}
-"""The finger links of each built-in robot model (`holds`); a robot from a file names links with
-"finger" in them (found by the simulator's adapter)."""
+FINGERS = "fingers"
+"""The property naming a robot's finger links in its own file (`holds`): a library arm's are
+the library's (prsc/library/<arm>.json), a spec may state a file arm's (`with fingers [...]`)."""
 
 
 def _interior(obj: dict[str, Any]) -> Interior | None:
@@ -34,7 +34,7 @@ def task_object(obj: dict[str, Any]) -> TaskObject:
     camera = obj.get("camera")
     view = None if not camera else (float(camera["fovy"]), float(camera["resolution"][0]) / float(camera["resolution"][1]))
     return TaskObject(str(obj["name"]), dims, support, interior is not None, view,  # type: ignore[arg-type]
-                      ROBOT_FINGERS.get(str(obj.get("model")), ()), bool(obj.get("static", False)))
+                      tuple(str(f) for f in obj.get("properties", {}).get(FINGERS, ())), bool(obj.get("static", False)))
 
 
 def bind_task(statements: TaskStatements, scene: dict[str, Any]) -> Task:

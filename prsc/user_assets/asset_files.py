@@ -16,6 +16,7 @@ Foundation module: imported by every layer, it imports mujoco only inside functi
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import xml.etree.ElementTree as ET
@@ -25,6 +26,8 @@ from pathlib import Path
 from typing import Sequence
 
 from prsc.user_assets.asset_cache import input_stats, inputs_digest
+from prsc.user_assets.asset_fitting import Fitting, library_arm
+from prsc.user_assets.joint_servos import is_position_servo, position_servo_joints  # noqa: F401 (read from here too)
 from prsc.user_assets.asset_inertia import unbalanced
 from prsc.errors import PrscError
 from prsc.user_assets.mesh_paths import mujoco_readable_meshes
@@ -70,6 +73,12 @@ def names_asset_file(model: object) -> bool:
     return isinstance(model, str) and model.strip().lower().endswith(ASSET_SUFFIXES)
 
 
+def names_asset(model: object) -> bool:
+    """Whether a `model` value names an asset read from a file: the user's URDF or MJCF, or a
+    library arm (prsc/library/<model>.json: a file and what the library adds to it)."""
+    return names_asset_file(model) or library_arm(model) is not None
+
+
 @dataclass(frozen=True)
 class AssetJoint:
     """One joint of an articulated asset: its kind, limits and starting value."""
@@ -103,6 +112,7 @@ class ArticulatedAsset:
     box_high: tuple[float, float, float]
     fixed: bool = False  # a URDF whose root link has mass 0: fixed in the world, as pybullet loads it
     servo_joints: tuple[str, ...] = ()  # the joints a position servo of the file's own holds (not a torque motor)
+    fitting: Fitting | None = None  # what the model library adds to the file (a library arm: asset_fitting.py)
 
     @property
     def key(self) -> str:
@@ -223,12 +233,23 @@ def file_spec(path: Path | str, folders: Sequence[str] = ()):
     return spec
 
 
-def asset_spec(path: Path | str, folders: Sequence[str] = ()):
+def asset_spec(path: Path | str, folders: Sequence[str] = (), fitting: Fitting | None = None):
     """A fresh `mujoco.MjSpec` of an asset file in its object's axes, ready to attach (the one
-    file-to-model path): the file's model turned by FORWARD_YAW."""
+    file-to-model path): the file's model, what the library adds to it (`fitting`), turned by FORWARD_YAW."""
     spec = file_spec(path, folders)
+    if fitting is not None:
+        fitting.apply(spec)
     _turn_forward(spec)
     return spec
+
+
+def model_asset(model: str, folders: Sequence[str] = ()) -> ArticulatedAsset:
+    """The description of the asset a `model` names (`names_asset`): a library arm's fitted file,
+    else the file looked up in `folders`."""
+    arm = library_arm(model)
+    if arm is not None:
+        return describe_asset(arm.file, (), arm.fitting)
+    return describe_asset(resolve_asset_file(model, folders), folders)
 
 
 def _turn_forward(spec) -> None:
@@ -257,16 +278,17 @@ def _turn_forward(spec) -> None:
         light.dir = turn @ np.asarray(light.dir, dtype=float)
 
 
-def describe_asset(path: Path | str, folders: Sequence[str] = ()) -> ArticulatedAsset:
-    """The description of an asset file (cached while it and every file it reads are unchanged)."""
+def describe_asset(path: Path | str, folders: Sequence[str] = (), fitting: Fitting | None = None) -> ArticulatedAsset:
+    """The description of an asset file, fitted (cached while it and every file it reads are unchanged)."""
     path = Path(path).resolve()
-    return _describe(str(path), tuple(folders), input_stats(path, folders))
+    return _describe(str(path), tuple(folders), input_stats(path, folders), fitting)
 
 
 @lru_cache(maxsize=64)
-def _describe(source: str, folders: tuple[str, ...], inputs: tuple[tuple[str, int, int], ...]) -> ArticulatedAsset:
+def _describe(source: str, folders: tuple[str, ...], inputs: tuple[tuple[str, int, int], ...],
+              fitting: Fitting | None) -> ArticulatedAsset:
     path = Path(source)
-    spec = asset_spec(path, folders)
+    spec = asset_spec(path, folders, fitting)
     try:
         model = spec.compile()
     except ValueError as error:
@@ -292,14 +314,18 @@ def _describe(source: str, folders: tuple[str, ...], inputs: tuple[tuple[str, in
     low, high = _geometry_box(model, qpos, root)
     links = tuple(model.body(b).name for b in range(1, model.nbody))
     sites = tuple(model.site(s).name for s in range(model.nsite))
+    digest = inputs_digest(path, folders)
+    if fitting is not None:  # the fitted file is another asset: its reach and folders are its own
+        digest = hashlib.sha256((digest + fitting.digest).encode()).hexdigest()
     return ArticulatedAsset(
-        source=source, digest=inputs_digest(path, folders), format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
+        source=source, digest=digest, format="urdf" if path.suffix.lower() == ".urdf" else "mjcf",
         name=spec.modelname or path.stem, root=model.body(root).name, links=links, joints=tuple(joints),
         actuators=tuple(model.actuator(a).name for a in range(model.nu)), sites=sites,
         tcp=_tool_frame(model, sites), box_low=low, box_high=high,
         fixed=path.suffix.lower() == ".urdf" and _massless_root(path, model.body(root).name),
-        servo_joints=position_servo_joints(model),
+        servo_joints=position_servo_joints(model), fitting=fitting,
     )
+
 
 
 def _geometry_box(model, qpos, root: int) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -334,38 +360,18 @@ def asset_at(asset: ArticulatedAsset, folders: Sequence[str], values: dict[str, 
     homes = {joint.name: joint.home for joint in asset.joints}
     if all(values.get(name, home) == home for name, home in homes.items()):
         return asset
-    low, high = _box_at(asset.source, tuple(folders), tuple(sorted({**homes, **values}.items())))
+    low, high = _box_at(asset.source, tuple(folders), tuple(sorted({**homes, **values}.items())), asset.fitting)
     return replace(asset, box_low=low, box_high=high)
 
 
 @lru_cache(maxsize=64)
-def _box_at(source: str, folders: tuple[str, ...], values: tuple[tuple[str, float], ...]):
-    model = asset_spec(Path(source), folders).compile()
+def _box_at(source: str, folders: tuple[str, ...], values: tuple[tuple[str, float], ...], fitting: Fitting | None):
+    model = asset_spec(Path(source), folders, fitting).compile()
     qpos = model.qpos0.copy()
     for name, value in values:
         qpos[model.jnt_qposadr[model.joint(name).id]] = value
     root = next(b for b in range(1, model.nbody) if model.body_parentid[b] == 0)
     return _geometry_box(model, qpos, root)
-
-
-def position_servo_joints(model) -> tuple[str, ...]:
-    """The joints that a position servo of the model drives directly."""
-    import mujoco
-
-    return tuple(sorted({model.joint(int(model.actuator_trnid[a, 0])).name for a in range(model.nu)
-                         if int(model.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
-                         and is_position_servo(model, a)}))
-
-
-def is_position_servo(model, actuator: int) -> bool:
-    """Whether a compiled model's actuator is a position servo, which holds its joint at its
-    control: gain kp > 0 and bias -kp on the position, as `<position>` writes (robosuite's
-    `<motor>`s apply torques and hold nothing)."""
-    import mujoco
-
-    gain = model.actuator_gainprm[actuator, 0]
-    return (int(model.actuator_biastype[actuator]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
-            and gain > 0 and model.actuator_biasprm[actuator, 1] == -gain)
 
 
 def _massless_root(path: Path, root: str) -> bool:

@@ -39,10 +39,12 @@ def unbalanced(link: ET.Element) -> bool:
 
 
 def _say_once(path: Path, message: str) -> None:
-    """One AssetFixWarning per file and message."""
+    """One AssetFixWarning per file and message; none for a library arm's file, not the user's to fix."""
     import warnings
 
-    if (str(path), message) not in _warned_files:
+    from prsc.user_assets.asset_fitting import library_files
+
+    if (str(path), message) not in _warned_files and Path(path).resolve() not in library_files():
         _warned_files.add((str(path), message))
         warnings.warn(AssetFixWarning(f"{path.name}: {message}"), stacklevel=3)
 

@@ -68,9 +68,12 @@ def test_mjcf_follows_the_runner_naming(handmade):
     assert model.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
 
 
-def test_mjcf_robot_base_sits_at_the_bottom_centre_reaching_along_y(handmade):
+def test_mjcf_robot_root_sits_where_the_file_puts_it_reaching_along_y(handmade):
     import mujoco
 
+    from prsc.assets.articulated import robot_model
+
+    panda = robot_model("panda")
     scene, root = _files(handmade, "rotated_robot")
     model = readback.mjcf_model(root / "mjcf" / "00000.xml")
     data = mujoco.MjData(model)
@@ -78,8 +81,8 @@ def test_mjcf_robot_base_sits_at_the_bottom_centre_reaching_along_y(handmade):
     mujoco.mj_forward(model, data)
     arm = next(o for o in scene["objects"] if o["name"] == "arm")
     rot = readback.quat_to_matrix(arm["quaternion"])
-    bottom = np.asarray(arm["position"]) - rot[:, 2] * arm["dimensions"][2] / 2
-    assert np.allclose(data.xpos[model.body("arm/base").id], bottom, atol=1e-6)
+    bottom = np.asarray(arm["position"]) + rot @ np.asarray(panda.root_offset)  # no rootOffset: the file's at home
+    assert np.allclose(data.xpos[model.body(f"arm/{panda.root}").id], bottom, atol=1e-6)
     # At home the tool centre is ahead of the base along the object's +y.
     tcp = data.site_xpos[model.site("arm/tcp").id] - bottom
     assert float(tcp @ rot[:, 1]) > 0.2 and abs(float(tcp @ rot[:, 0])) < 0.01
@@ -203,8 +206,9 @@ def test_sdf_robot_kinematics_match_the_urdf(handmade):
     """At the home posture every Panda link sits in the same place whether loaded from SDF or URDF."""
     import pybullet as p
 
-    from prsc.assets.panda import ARM_JOINTS, HOME_QPOS
+    from prsc.assets.articulated import robot_model
 
+    home = {j.name: j.home for j in robot_model("panda").joints if j.kind == "revolute"}
     _, root = _files(handmade, "rotated_robot")
     client = p.connect(p.DIRECT)
     try:
@@ -220,7 +224,7 @@ def test_sdf_robot_kinematics_match_the_urdf(handmade):
 
         js, ju = joints(from_sdf), joints(from_urdf)
         assert sorted(js) == sorted(ju)
-        for name, q in zip(ARM_JOINTS, HOME_QPOS):
+        for name, q in home.items():
             p.resetJointState(from_sdf, js[name], q, physicsClientId=client)
             p.resetJointState(from_urdf, ju[name], q, physicsClientId=client)
         for name in js:
@@ -273,14 +277,23 @@ def test_usd_stage_has_physics_and_an_articulated_robot(handmade):
         assert UsdPhysics.MassAPI(prim).GetMassAttr().Get() == pytest.approx(o["mass"], rel=1e-6)
         assert UsdPhysics.RigidBodyAPI(prim).GetKinematicEnabledAttr().Get() == o["static"]
         assert any(c.HasAPI(UsdPhysics.CollisionAPI) for c in prim.GetChildren()), o["name"]
-    panda = stage.GetPrimAtPath("/World/r1/mount/panda")
+    prim = _panda_prim()
+    panda = stage.GetPrimAtPath(f"/World/r1/mount/{prim}")
     assert panda.HasAPI(UsdPhysics.ArticulationRootAPI)
-    joint1 = UsdPhysics.RevoluteJoint(stage.GetPrimAtPath("/World/r1/mount/panda/joints/joint1"))
+    joint1 = UsdPhysics.RevoluteJoint(stage.GetPrimAtPath(f"/World/r1/mount/{prim}/joints/panda_joint1"))
     assert joint1.GetLowerLimitAttr().Get() == pytest.approx(math.degrees(-2.9671), rel=1e-6)
-    finger = UsdPhysics.PrismaticJoint(stage.GetPrimAtPath("/World/r1/mount/panda/joints/finger_joint1"))
+    finger = UsdPhysics.PrismaticJoint(stage.GetPrimAtPath(f"/World/r1/mount/{prim}/joints/panda_finger_joint1"))
     assert finger.GetUpperLimitAttr().Get() == pytest.approx(0.04)
     links = [p for p in panda.GetChildren() if p.HasAPI(UsdPhysics.RigidBodyAPI)]
-    assert len(links) == 13 and all(any(c.HasAPI(UsdPhysics.CollisionAPI) for c in l.GetChildren()) or l.GetName() in ("link8", "tcp") for l in links)
+    assert len(links) == 13 and all(any(c.HasAPI(UsdPhysics.CollisionAPI) for c in l.GetChildren())
+                                    or l.GetName() in ("panda_link8", "panda_grasptarget") for l in links)
+
+
+def _panda_prim() -> str:
+    """The library Panda's USD prim: named after its asset key (the file's stem and content hash)."""
+    from prsc.assets.articulated import robot_model
+
+    return robot_model("panda").prim_name
 
 
 def test_usd_robot_links_match_the_mjcf_at_home(handmade):
@@ -295,8 +308,8 @@ def test_usd_robot_links_match_the_mjcf_at_home(handmade):
     mujoco.mj_forward(model, data)
     stage = Usd.Stage.Open(str(root / "usd" / "00000.usda"))
     cache = UsdGeom.XformCache()
-    for link in ("link0", "link3", "link7", "hand", "leftfinger"):
-        m = cache.GetLocalToWorldTransform(stage.GetPrimAtPath(f"/World/arm/mount/panda/{link}"))
+    for link in ("panda_link0", "panda_link3", "panda_link7", "panda_hand", "panda_leftfinger"):
+        m = cache.GetLocalToWorldTransform(stage.GetPrimAtPath(f"/World/arm/mount/{_panda_prim()}/{link}"))
         assert np.allclose([m[3][0], m[3][1], m[3][2]], data.xpos[model.body(f"arm/{link}").id], atol=2e-5), link
 
 
@@ -350,6 +363,6 @@ def test_a_free_floating_robot_is_free_in_every_format(tmp_path):
     sdf = (root / "sdf" / "00000.sdf").read_text()
     assert "<static>0</static>" in sdf and "world_weld" not in sdf
     stage = Usd.Stage.Open(str(root / "usd" / "00000.usda"))
-    weld = stage.GetPrimAtPath("/World/arm/mount/panda/joints/root_joint")
+    weld = stage.GetPrimAtPath(f"/World/arm/mount/{_panda_prim()}/joints/root_joint")
     assert weld.GetAttribute("physics:jointEnabled").Get() is False
     assert readback.usd_errors(root / "usd" / "00000.usda") == []

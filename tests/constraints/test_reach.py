@@ -1,100 +1,69 @@
-"""`reachable by R`: the shipped reachable-set data against the arm's IK, and the specifier on it."""
+"""`reachable by R` for the library's Panda: its ring from the one builder against the one IK, and the specifier on it."""
 
 from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
+import os
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from prsc.constraints import lower_program
-from prsc.constraints.reach_rows import reach_ring, reach_file
+from prsc.constraints.arm_reach import TopDownIK, arm_reach
 from prsc.errors import PrscError
 from prsc.geometry.polytope import Polytope
 from prsc.constraints.reach_ring import contains
 from prsc.geometry.uniform_sampling import prepare_sampler
 from prsc.ir import compile_program
 from prsc.sampling import Sampler
+from prsc.user_assets.asset_files import model_asset
 
 REPO = Path(__file__).resolve().parents[2]
 REACH_SPEC = REPO / "specs" / "table_cube_reach.prs"
 
 
 @pytest.fixture(scope="module")
-def arm():
-    from prsc.commands.reach import TopDownReach
-
-    return TopDownReach()
+def panda():
+    """The library's Panda: its description and the one IK on its model (prsc/user_assets/arm_ik.py)."""
+    asset = model_asset("panda")
+    return asset, arm_reach(asset).ring, TopDownIK(asset)
 
 
 def _points(a: np.ndarray, b: np.ndarray, n: int, seed: int) -> np.ndarray:
     return prepare_sampler(Polytope.from_rows(a, b)).sample(np.random.default_rng(seed), n)
 
 
-def test_the_ring_is_what_the_script_derives_from_its_ik_rays():
-    from prsc.commands import reach
-
-    data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
-    assert data["heights"] == list(reach.HEIGHTS) and len(data["angles"]) == reach.SECTORS
-    rays = {(k, j): (None if lo is None else (lo, hi)) for k, j, lo, hi in data["rays"]}
-    derived = reach.reach_data(rays)
-    for key, value in derived["ring"].items():
-        np.testing.assert_allclose(np.array(data["ring"][key]), np.array(value), atol=1e-12)
+def test_the_library_arms_ring_comes_from_the_one_builder(panda):
+    asset, ring, _ = panda
+    assert asset.fitting is not None and asset.tcp == "tcp"
+    assert not (REPO / "prsc" / "constraints" / "panda_reach.json").exists()
+    data = json.loads((Path(os.environ["PRSC_BUILD_DIR"]) / "reach").glob(f"{asset.key}-tcp-*.json").__next__()
+                      .read_text(encoding="utf-8"))
+    assert data["sha256"] == asset.digest and len(data["A"]) == len(ring.b)
 
 
-def test_points_in_the_ring_are_reached_top_down_and_points_past_it_are_not(arm):
-    ring = reach_ring("panda")
+def test_points_in_the_ring_are_reached_top_down_and_points_past_it_are_not(panda):
+    _, ring, ik = panda
     a, b = ring.a, ring.b
     candidates = _points(a, b, 60, seed=1)
     inside = candidates[contains(ring, candidates)][:12]
     assert len(inside) == 12
-    # Some lie beside and behind the base (the old single cell kept only the half ahead, y > 0).
+    # Some lie beside and behind the base.
     assert (inside[:, 1] < 0).sum() >= 2
-    assert all(arm.reaches(p) for p in inside), "a point of the shipped ring is out of the arm's reach"
+    assert all(ik.reaches_from_home(p) for p in inside), "a point of the ring is out of the arm's reach"
     # The same test fails on a wrong cell: pushed 30 cm out, the part past the longest
-    # radius the IK scan found (plus 5 cm) is out of reach.
-    data = json.loads(reach_file("panda").read_text(encoding="utf-8"))
-    longest = max(hi for _, _, lo, hi in data["rays"] if hi is not None)
+    # radius the ring keeps (plus 5 cm) is out of reach.
+    longest = max(math.hypot(*p[:2]) for p in _points(a, b, 400, seed=3))
     outer = a[:, :2].any(axis=1) & (b > 0)
     candidates = _points(a, b + np.where(outer, 0.3, 0.0), 400, seed=2)
     beyond = [p for p in candidates if math.hypot(p[0], p[1]) > longest + 0.05][:6]
-    assert len(beyond) == 6 and not any(arm.reaches(p) for p in beyond)
+    assert len(beyond) == 6 and not any(ik.reaches_from_home(p) for p in beyond)
 
 
-def test_a_pose_with_the_hand_inside_the_base_is_not_reached(arm):
-    # Beside the base at its height the IK puts the tool on the point, with the hand in link0.
-    point = np.array([0.1, 0.05, 0.0])
-    solution = arm.ik.solve(point, arm.down, arm.home)
-    assert solution.position_error < 1e-3 and solution.orientation_error < 1e-2
-    assert arm.ik.self_collides(solution.q) and not arm.ik.self_collides(arm.home)
-    assert not arm.ik.solve_free(point, arm.down, arm.home).reached
-    assert not arm.reaches(point)
-
-
-def test_a_point_home_alone_misses_is_sought_from_home_turned_towards_it(arm):
-    # 0.66 m out at 75 degrees to the left, 12 cm up (a cube's approach): the IK from home stalls
-    # 12 cm short; from home turned towards it, wrist turned back, it gets there.
-    above = np.array([-0.638, 0.171, 0.12])
-    assert arm.ik.solve(above, arm.down, arm.home).position_error > 0.05
-    assert arm.ik.solve_from_home(above, arm.down).reached
-    assert arm.reaches(above - [0.0, 0.0, 0.12])
-
-
-def test_the_constraint_stage_reads_data_and_never_imports_mujoco():
-    code = (
-        "import sys; from prsc.ir import compile_program; from prsc.constraints import lower_program;"
-        f"lower_program(compile_program({str(REACH_SPEC)!r}, ()));"
-        "print(sorted(m for m in ('mujoco', 'mink', 'prsc.backends') if m in sys.modules))"
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
-    assert out.strip() == "[]"
-
-
-def test_reachable_cubes_are_sampled_exactly_inside_the_cell_and_fill_it():
+def test_reachable_cubes_are_sampled_exactly_inside_the_ring_and_reached_by_the_one_ik(panda):
+    asset, ring, ik = panda
     program = compile_program(str(REACH_SPEC), ())
     cprog = lower_program(program)
     c1 = next(p for p in cprog.objects if p.name == "c1")
@@ -104,22 +73,23 @@ def test_reachable_cubes_are_sampled_exactly_inside_the_cell_and_fill_it():
     # One scene at a time (Gibbs sweeps): the hole and the gap subtracted exactly, nothing rejected.
     # (Candidate rounds, the default for many scenes, test them instead: tests/sampling/test_candidates.py.)
     sampler = Sampler(program, "exact", batched=False)
-    ring = reach_ring("panda")
     inside, local = 0, []
     for index in range(300):
         result = sampler.sample(11, index)
         assert result.stats.total == 0
         objects = {o.name: o for o in result.objects}
         robot = objects["r1"]
-        base = robot.position - robot.rotation[:, 2] * robot.dims[2] / 2
-        q = robot.rotation.T @ (objects["c1"].position - base)
+        root = robot.position + robot.rotation @ np.asarray(robot.props["rootOffset"])
+        q = robot.rotation.T @ (objects["c1"].position - root)
         inside += bool(contains(ring, q, tol=1e-7)[0])
         local.append(q)
     assert inside == 300
     local = np.array(local)
     # They spread over the reachable part of the tray: both near and far from the base.
     radius = np.hypot(local[:, 0], local[:, 1])
-    assert radius.min() < 0.35 and radius.max() > 0.7
+    assert radius.min() < 0.55 and radius.max() > 0.7
+    # Every cube (centre) of the first 20 scenes is reached top-down by the one IK.
+    assert all(ik.reaches_from_home(q) for q in local[:20])
 
 
 def test_reachable_by_an_unknown_model_or_a_point_is_an_error_at_the_specifier(tmp_path):
@@ -147,15 +117,3 @@ def test_explain_shows_the_rows_and_their_source(capsys):
     entry = next(e for e in json.loads(capsys.readouterr().out)["rules"] if e["kind"] == "reachable" and e["object"] == "c1")
     assert entry["line"] == line and entry["rows_are"] == "the same in every scene" and len(entry["rows"]["A"]) > 4
     assert not math.isnan(entry["rows"]["b"][0])
-
-
-def test_the_reach_builder_certifies_the_controllers_own_heights(arm, monkeypatch):
-    """The Panda's reach builder reads the handover's approach and lift (prsc/runner/grasping.py),
-    not copies of them: a lift no arm makes leaves a point it reaches out of reach."""
-    from prsc.commands.reach import TopDownReach
-    from prsc.runner import grasping
-
-    point = np.array([0.0, 0.45, 0.05])
-    assert arm.reaches(point)
-    monkeypatch.setattr(grasping, "LIFT_HEIGHT", 3.0)
-    assert not TopDownReach().reaches(point)

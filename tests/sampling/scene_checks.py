@@ -760,19 +760,22 @@ def _view_excess(camera: Body, body: Body) -> float:
     return worst
 
 
-REACH_DATA = Path(__file__).resolve().parents[2] / "prsc" / "constraints"
-
-
 def _outside_reach(robot: Body, p: np.ndarray) -> str | None:
-    """Whether p is in the robot model's reachable ring (the outer cell, out of the hole and
-    the gap), read from the shipped data file itself."""
-    model = robot.data.get("properties", {}).get("model") or robot.data.get("model")
-    path = REACH_DATA / f"{model}_reach.json"
-    if not path.is_file():
-        raise Unknown(f"no reach data for model {model!r}")
-    ring = json.loads(path.read_text(encoding="utf-8"))["ring"]
-    base = robot.p - robot.r[:, 2] * robot.dims[2] / 2
-    local = robot.r.T @ (p - base)
+    """Whether p is in the robot's reachable ring (the outer cell, out of the hole and the gap),
+    as the ring's own file in the build folder holds it, about the root the scene mounts."""
+    from prsc.constraints.arm_reach import arm_reach, reach_cache
+    from prsc.user_assets.asset_files import model_asset, names_asset
+
+    model = robot.data.get("model")
+    properties = robot.data.get("properties", {})
+    if not names_asset(model) or "rootOffset" not in properties:
+        raise Unknown(f"no reach for model {model!r}")
+    asset = model_asset(model)
+    if properties.get("tcp") not in (None, asset.tcp):
+        raise Unknown(f"{robot.name}'s tool is not its file's")
+    arm_reach(asset)  # built (or read) once: the checks read its file
+    ring = json.loads(reach_cache(asset).read_text(encoding="utf-8"))
+    local = robot.r.T @ (p - (robot.p + robot.r @ np.asarray(properties["rootOffset"])))
     outside = float(np.max(np.array(ring["A"]) @ local - np.array(ring["b"])))
     # Inside an excluded cell by its least depth: every row holds with room to spare.
     inside = [float(np.min(np.array(ring[key + "_b"]) - np.array(ring[key + "_A"]) @ local)) for key in ("hole", "gap")]
