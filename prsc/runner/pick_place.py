@@ -1,4 +1,4 @@
-"""An example controller for users: one Panda moves a cube from one tray to the other.
+"""An example controller for users: one arm with a gripper moves a cube from one tray to the other.
 
     prsc run specs/pick_place.prs --controller prsc.runner.pick_place:pick_place -n 20
 
@@ -16,6 +16,7 @@ import numpy as np
 from prsc.runner.grasping import GraspFailure, HeldCube
 from prsc.runner.motion import Arm, Simulation, Unreachable
 from prsc.runner.roles import footprint_distance, objects_by_class
+from prsc.assets.articulated import robot_model
 from prsc.errors import PrscError
 
 
@@ -27,8 +28,9 @@ def _roles(scene: dict) -> tuple[dict, dict, dict, dict]:
         raise PrscError(f"scene {scene.get('spec', '?')} #{scene.get('index', '?')} does not fit pick_place: "
                         f"it needs one Robot, two Trays and one Cube (found {counts})")
     robot, cube = found["Robot"][0], found["Cube"][0]
-    if robot.get("model") != "panda":
-        raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}; pick_place drives a Panda")
+    if robot_model(robot.get("model")) is None:
+        raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}, which is no arm: pick_place "
+                        "drives an arm with a gripper (the built-in arm, or a URDF or MJCF arm)")
     source, target = sorted(found["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
     return robot, cube, source, target
 
@@ -42,7 +44,8 @@ class PickPlace:
         """One episode: the outcome, why, and how far the cube ended from the target tray's centre."""
         robot, cube_obj, _, target = _roles(scene)
         sim = Simulation(model, data)
-        arm = Arm.from_scene(model, data, robot["body"])
+        arm = Arm.of(robot, model, data)
+        data.ctrl[arm.gripper.actuators] = arm.gripper.opened
         cube = HeldCube(sim, cube_obj)
         sim.wait(0.3)  # the objects settle onto their supports
         place = cube.release_point(target)
@@ -61,7 +64,7 @@ class PickPlace:
 
     @staticmethod
     def check(scene: dict) -> None:
-        """Refuse a scene without one Panda, two Trays and one Cube."""
+        """Refuse a scene without one arm, two Trays and one Cube."""
         _roles(scene)
 
 

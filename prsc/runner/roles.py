@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from prsc.assets.articulated import robot_model
 from prsc.errors import PrscError
 from prsc.geometry.rotations import quat_to_matrix
 
@@ -46,6 +47,9 @@ def objects_by_class(scene: dict, wanted: tuple[str, ...]) -> dict[str, list[dic
 def find_roles(scene: dict) -> Roles:
     """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera.
 
+    Each Robot must be an arm (the built-in arm, or a URDF or MJCF arm); whether it has a
+    gripper is seen in the compiled model (prsc/runner/motion.py's `Arm.of`).
+
     An object fills a role when its class or one of its ancestors (the scene's `classes`
     map, e.g. `RedCube(Cube)`) is the role's class.
     """
@@ -67,8 +71,9 @@ def find_roles(scene: dict) -> Roles:
         )
     robots = sorted(by_class["Robot"], key=lambda o: o["position"][0])
     for robot in robots:
-        if robot.get("model") != "panda":
-            raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}; the runner drives Pandas only")
+        if robot_model(robot.get("model")) is None:
+            raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}, which is no arm: the handover "
+                            "drives two arms with grippers (the built-in arm, or a URDF or MJCF arm)")
     cube = by_class["Cube"][0]
     trays = sorted(by_class["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
     return Roles(
