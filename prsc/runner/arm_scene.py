@@ -20,7 +20,7 @@ TOLERANCE = 0.01  # m from its goal where the tool has arrived
 ANGLE = 0.1  # rad from straight down
 TIMEOUT = 8.0  # simulated s the servos get to bring the tool there
 JOINT_SPEED = 1.0  # rad/s (m/s) at which `ramp` moves the servos' targets: a step in the targets
-# of stiff servos overshoots (the built-in arm's tool fell 14 cm below a point it was sent to)
+# of stiff servos overshoots (the Panda's tool fell 14 cm below a point it was sent to)
 
 
 @dataclass(frozen=True)
@@ -54,18 +54,13 @@ class SceneArm:
         return root, self.frames.heading(data, root)
 
 
-def scene_robots(scene: dict) -> list[tuple[dict, object]]:
-    """The scene's robot objects (with their body names) and their assets, in the scene's order."""
-    robots = [(o, robot_model(o.get("model"))) for o in with_body_names(scene)["objects"]]
-    return [(o, r) for o, r in robots if r is not None]
-
-
 def scene_robot(scene: dict, controller: str) -> tuple[dict, object]:
     """The scene's one robot object and its asset."""
-    robots = scene_robots(scene)
+    robots = [(o, robot_model(o.get("model"))) for o in with_body_names(scene)["objects"]]
+    robots = [(o, r) for o, r in robots if r is not None]
     if len(robots) != 1:
         raise PrscError(f"scene {scene.get('spec', '?')} #{scene.get('index', '?')} does not fit {controller}: it needs "
-                        f"exactly one robot (an object whose model is the built-in arm or a URDF/MJCF arm), found {len(robots)}")
+                        f"exactly one robot (an object whose model is the Panda or a URDF/MJCF arm), found {len(robots)}")
     return robots[0]
 
 

@@ -2,7 +2,7 @@
 
 A MuJoCo render context (MjrContext) holds what the GPU side needs of a model: its
 meshes, textures, height fields, skins and materials' textures, plane grids, buffer
-sizes. Uploading a built-in arm's meshes costs about 0.1 CPU s, so a worker keeps the context
+sizes. Uploading the Panda's meshes costs about 0.1 CPU s, so a worker keeps the context
 of the last model and hands it to the next model with the same render assets (every scene
 of a spec), after setting the few numbers that follow the model's size (fog, shadow clip).
 The images are the same bits a fresh context renders (tests/runner/test_rendering.py).

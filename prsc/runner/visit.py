@@ -6,7 +6,7 @@ point 10 cm above every cube in turn, coming down from 12 cm above it (the heigh
         --controller prsc.runner.visit:visit -n 5
 
 It knows nothing of a particular robot: the scene's robot object names its asset (the
-built-in arm or a URDF/MJCF file), and the asset's description (prsc.user_assets.asset_files) gives the
+Panda or a URDF/MJCF file), and the asset's description (prsc.user_assets.asset_files) gives the
 joints, the tool frame and the home pose; the compiled model gives the chain of joints that
 moves the tool and the servos that hold them (a URDF arm gets one per joint from prsc). IK
 is prsc/user_assets/arm_ik.py on a scratch copy of the scene's model. Outcomes: `visited` (the tool came within 1 cm of every point,
