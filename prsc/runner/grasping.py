@@ -9,8 +9,7 @@ from prsc.runner.motion import Arm, Simulation
 from prsc.geometry.rotations import quat_to_matrix
 from prsc.user_assets.arm_ik import REACH_APPROACH
 
-# m above the cube centre before descending: the approach `reachable by` certifies for every
-# arm; the built-in arm's reach builder (prsc/commands/reach.py) reads these two.
+# m above the cube centre before descending: the approach `reachable by` certifies for every arm.
 APPROACH_HEIGHT = REACH_APPROACH
 LIFT_HEIGHT = 0.15  # m the cube is lifted
 PLACE_CLEARANCE = 0.012  # m between the cube's bottom and the surface when released

@@ -77,7 +77,7 @@ class HandoverEpisode:
         self.left = Arm.of(self.roles.left_robot, model, data)
         self.right = Arm.of(self.roles.right_robot, model, data)
         for arm in (self.left, self.right):  # a file arm's ready pose may leave its fingers shut
-            data.ctrl[arm.gripper.actuators] = arm.gripper.opened
+            self.sim.command_gripper(arm, closed=False)
         self.camera: CeilingCamera | None = None
 
     def cube_position(self) -> np.ndarray:

@@ -164,9 +164,13 @@ class Simulation:
             mujoco.mj_step(self.model, self.data, nstep=CONTROL_STEPS)
         self._check_stable()
 
+    def command_gripper(self, arm: Arm, closed: bool) -> None:
+        """Set the gripper's controls to close (or open) it."""
+        self.data.ctrl[arm.gripper.actuators] = arm.gripper.closed if closed else arm.gripper.opened
+
     def grip(self, arm: Arm, closed: bool, seconds: float) -> None:
         """Close (or open) the gripper and wait for it."""
-        self.data.ctrl[arm.gripper.actuators] = arm.gripper.closed if closed else arm.gripper.opened
+        self.command_gripper(arm, closed)
         self.wait(seconds)
 
     def _check_stable(self) -> None:

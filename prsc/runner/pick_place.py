@@ -15,8 +15,7 @@ import numpy as np
 
 from prsc.runner.grasping import GraspFailure, HeldCube
 from prsc.runner.motion import Arm, Simulation, Unreachable
-from prsc.runner.roles import footprint_distance, objects_by_class
-from prsc.assets.articulated import robot_model
+from prsc.runner.roles import footprint_distance, objects_by_class, require_arm
 from prsc.errors import PrscError
 
 
@@ -28,9 +27,7 @@ def _roles(scene: dict) -> tuple[dict, dict, dict, dict]:
         raise PrscError(f"scene {scene.get('spec', '?')} #{scene.get('index', '?')} does not fit pick_place: "
                         f"it needs one Robot, two Trays and one Cube (found {counts})")
     robot, cube = found["Robot"][0], found["Cube"][0]
-    if robot_model(robot.get("model")) is None:
-        raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}, which is no arm: pick_place "
-                        "drives an arm with a gripper (the built-in arm, or a URDF or MJCF arm)")
+    require_arm(robot, "pick_place drives an arm with a gripper")
     source, target = sorted(found["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
     return robot, cube, source, target
 
@@ -45,7 +42,7 @@ class PickPlace:
         robot, cube_obj, _, target = _roles(scene)
         sim = Simulation(model, data)
         arm = Arm.of(robot, model, data)
-        data.ctrl[arm.gripper.actuators] = arm.gripper.opened
+        sim.command_gripper(arm, closed=False)
         cube = HeldCube(sim, cube_obj)
         sim.wait(0.3)  # the objects settle onto their supports
         place = cube.release_point(target)

@@ -44,6 +44,13 @@ def objects_by_class(scene: dict, wanted: tuple[str, ...]) -> dict[str, list[dic
     return found
 
 
+def require_arm(robot: dict, needs: str) -> None:
+    """Refuse a Robot whose model is no arm (PrscError saying what the controller `needs`)."""
+    if robot_model(robot.get("model")) is None:
+        raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}, which is no arm: {needs} "
+                        "(the built-in arm, or a URDF or MJCF arm)")
+
+
 def find_roles(scene: dict) -> Roles:
     """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera.
 
@@ -71,9 +78,7 @@ def find_roles(scene: dict) -> Roles:
         )
     robots = sorted(by_class["Robot"], key=lambda o: o["position"][0])
     for robot in robots:
-        if robot_model(robot.get("model")) is None:
-            raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}, which is no arm: the handover "
-                            "drives two arms with grippers (the built-in arm, or a URDF or MJCF arm)")
+        require_arm(robot, "the handover drives two arms with grippers")
     cube = by_class["Cube"][0]
     trays = sorted(by_class["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
     return Roles(
