@@ -36,7 +36,11 @@ class SceneArm:
     @staticmethod
     def of(scene: dict, model: mujoco.MjModel, controller: str) -> "SceneArm":
         """The scene's one robot in `model`; a PrscError naming `controller` when there is not exactly one."""
-        robot, asset = scene_robot(scene, controller)
+        return SceneArm.of_robot(*scene_robot(scene, controller), model)
+
+    @staticmethod
+    def of_robot(robot: dict, asset: object, model: mujoco.MjModel) -> "SceneArm":
+        """A robot object (with its `body`) and its asset in `model`."""
         prefix = f"{robot['body']}/"
         tool = prefix + str((robot.get("properties") or {}).get("tcp") or asset.tcp)  # the spec's `with tcp`, else the file's
         moving = chain_joints(model, tool) & driven_joints(model)

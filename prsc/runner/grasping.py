@@ -1,22 +1,20 @@
-"""Top-down pick and place of a box-shaped object with one Panda, judged from simulator ground truth."""
+"""Top-down pick and place of a box-shaped object with one arm, judged from simulator ground truth."""
 
 from __future__ import annotations
 
 import mujoco
 import numpy as np
 
-from prsc.assets import panda
 from prsc.runner.motion import Arm, Simulation
 from prsc.geometry.rotations import quat_to_matrix
 from prsc.user_assets.arm_ik import REACH_APPROACH
 
-# m above the cube centre before descending: the approach `reachable by` certifies for every
-# arm; the Panda's reach builder (prsc/commands/reach.py) reads these two.
+# m above the cube centre before descending: the approach `reachable by` certifies for every arm.
 APPROACH_HEIGHT = REACH_APPROACH
 LIFT_HEIGHT = 0.15  # m the cube is lifted
 PLACE_CLEARANCE = 0.012  # m between the cube's bottom and the surface when released
 SLIP_TOLERANCE = 0.02  # m the cube may shift in the gripper between lift and release
-MIN_GRIP_OPENING = 0.25  # fingers closer than this fraction of the cube's half width hold nothing
+MIN_GRIP_OPENING = 0.5  # fingers closer to closed than this fraction of the cube's half width hold nothing
 
 
 class GraspFailure(Exception):
@@ -39,11 +37,11 @@ class HeldCube:
 
     def offset_from(self, arm: Arm) -> np.ndarray:
         """Cube centre relative to the arm's tool centre."""
-        return self.position() - self.sim.data.site_xpos[arm.tcp_id]
+        return self.position() - arm.frames.tool_pose(self.sim.data)[0]
 
     def gripper_closed_empty(self, arm: Arm) -> bool:
         """Whether the fingers closed (nearly) fully, i.e. on nothing."""
-        return bool(self.sim.data.qpos[arm.finger_adr] < MIN_GRIP_OPENING * self.half_width)
+        return arm.gripper.opening(self.sim.data, arm.frames) < MIN_GRIP_OPENING * self.half_width
 
     def pick_and_place(self, arm: Arm, cube: np.ndarray, place: np.ndarray, stage: str, go_home: bool) -> None:
         """Plan every waypoint, then pick the cube at `cube` and release it with its centre at `place`.
@@ -51,7 +49,6 @@ class HeldCube:
         Raises motion.Unreachable before moving when IK misses a waypoint, GraspFailure when the grasp fails."""
         sim = self.sim
         up = np.array([0.0, 0.0, 1.0])
-        home = np.array(panda.HOME_QPOS)
         above = cube + up * APPROACH_HEIGHT
         lifted = cube + up * LIFT_HEIGHT
         over_place = place + up * max(LIFT_HEIGHT, APPROACH_HEIGHT)
@@ -71,7 +68,7 @@ class HeldCube:
         sim.snapshot(f"above the cube ({stage})")
         sim.move(arm, descend, seconds=0.8)
         sim.snapshot(f"grasp ({stage})")
-        sim.grip(arm, panda.GRIPPER_CLOSED, 0.5)
+        sim.grip(arm, True, 0.5)
         if self.gripper_closed_empty(arm):
             raise GraspFailure(f"{stage}: the gripper closed on nothing")
         sim.move(arm, lift, seconds=0.8)
@@ -88,10 +85,10 @@ class HeldCube:
         slip = float(np.linalg.norm(self.offset_from(arm) - held))
         if slip > SLIP_TOLERANCE:
             raise GraspFailure(f"{stage}: the cube slipped {slip * 100:.1f} cm in the gripper while carried")
-        sim.grip(arm, panda.GRIPPER_OPEN, 0.4)
+        sim.grip(arm, False, 0.4)
         sim.move(arm, retreat, seconds=0.6)
         if go_home:
-            sim.move(arm, [home])
+            sim.move(arm, [arm.home])
 
     def resting_in(self, tray: dict) -> tuple[bool, float]:
         """(whether the cube is inside the tray object's box, up to a cube's height above it; its speed in m/s)."""

@@ -6,7 +6,7 @@ at each end, and the end that brings the fingers nearer the tool's axis closes."
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -23,6 +23,15 @@ class Gripper:
     opened: np.ndarray  # control per actuator that opens the gripper
     closed: np.ndarray  # and that closes it
     closing: np.ndarray  # horizontal unit vector in the tool's frame along which the fingers close
+    fingers: tuple[int, ...] = ()  # the bodies its joints move
+    shut: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # their centres of mass in the tool's frame when closed
+
+    def opening(self, data: mujoco.MjData, arm: ArmFrames) -> float:
+        """How far (m, summed over the fingers, along the closing axis) the fingers stand from
+        closed in `data` (after kinematics): what a closed grasp holds between them."""
+        position, rotation = arm.tool_pose(data)
+        offsets = (data.xipos[list(self.fingers)] - position) @ rotation
+        return float(np.abs((offsets - self.shut) @ self.closing).sum())
 
 
 def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) -> Gripper | None:
@@ -30,7 +39,7 @@ def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) ->
     chain = chain_joints(model, tool)
     scratch = mujoco.MjData(model)
     mujoco.mj_resetData(model, scratch)
-    actuators, opened, closed, moves = [], [], [], []
+    actuators, opened, closed, moves, fingers, shut_at = [], [], [], [], [], []
     for a in range(model.nu):
         joints = _transmission(model, a)
         names = [model.joint(j).name for j, _ in joints]
@@ -45,6 +54,8 @@ def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) ->
         closed.append(float(ends[shut]))
         opened.append(float(ends[1 - shut]))
         moves.append(spreads[1 - shut] - spreads[shut])
+        fingers += [int(model.jnt_bodyid[j]) for j, _ in joints]
+        shut_at.append(spreads[shut])
     if not actuators:
         return None
     motion = np.concatenate(moves)[:, :2]
@@ -52,7 +63,8 @@ def gripper_of(model: mujoco.MjModel, prefix: str, arm: ArmFrames, tool: str) ->
     if np.linalg.norm(main) < 1e-6:
         return None  # its joints move nothing across the tool's axis
     axis = main / np.linalg.norm(main)
-    return Gripper(np.array(actuators), np.array(opened), np.array(closed), np.array([axis[0], axis[1], 0.0]))
+    return Gripper(np.array(actuators), np.array(opened), np.array(closed), np.array([axis[0], axis[1], 0.0]),
+                   tuple(fingers), np.concatenate(shut_at))
 
 
 def _transmission(model: mujoco.MjModel, a: int) -> list[tuple[int, float]]:

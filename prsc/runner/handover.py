@@ -1,10 +1,12 @@
-"""The handover controller: perceive, pick with the left Panda, hand over, pick with the right, place.
+"""The handover controller: perceive, pick with the left arm, hand over, pick with the right, place.
 
 The controller is the paper's open-loop pipeline (section IV): the ceiling RGB-D camera
 locates the cube, IK plans top-down tool waypoints, position servos track them, and the
 grasp is physical (finger friction against gripper force). The outcome is decided from
-simulator ground truth at the first failing stage. `handover` is the default controller of
-`prsc run` (see controller.py for the interface every controller follows).
+simulator ground truth at the first failing stage. It drives any two arms with grippers,
+through the interface the example `pick` uses (prsc/runner/motion.py). `handover` is the
+default controller of `prsc run` (see controller.py for the interface every controller
+follows).
 """
 
 from __future__ import annotations
@@ -72,8 +74,10 @@ class HandoverEpisode:
         self.roles = find_roles(scene)
         self.sim = Simulation(model, data)
         self.cube = HeldCube(self.sim, self.roles.cube)
-        self.left = Arm.from_scene(model, data, self.roles.left_robot["body"])
-        self.right = Arm.from_scene(model, data, self.roles.right_robot["body"])
+        self.left = Arm.of(self.roles.left_robot, model, data)
+        self.right = Arm.of(self.roles.right_robot, model, data)
+        for arm in (self.left, self.right):  # a file arm's ready pose may leave its fingers shut
+            self.sim.command_gripper(arm, closed=False)
         self.camera: CeilingCamera | None = None
 
     def cube_position(self) -> np.ndarray:
@@ -164,7 +168,7 @@ class HandoverController:
 
     @staticmethod
     def check(scene: dict) -> None:
-        """Refuse a scene without two Pandas, two Trays, one Cube and one Camera (PrscError)."""
+        """Refuse a scene without two arms, two Trays, one Cube and one Camera (PrscError)."""
         find_roles(scene)
 
     @staticmethod

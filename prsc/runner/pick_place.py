@@ -1,4 +1,4 @@
-"""An example controller for users: one Panda moves a cube from one tray to the other.
+"""An example controller for users: one arm with a gripper moves a cube from one tray to the other.
 
     prsc run specs/pick_place.prs --controller prsc.runner.pick_place:pick_place -n 20
 
@@ -15,7 +15,7 @@ import numpy as np
 
 from prsc.runner.grasping import GraspFailure, HeldCube
 from prsc.runner.motion import Arm, Simulation, Unreachable
-from prsc.runner.roles import footprint_distance, objects_by_class
+from prsc.runner.roles import footprint_distance, objects_by_class, require_arm
 from prsc.errors import PrscError
 
 
@@ -27,8 +27,7 @@ def _roles(scene: dict) -> tuple[dict, dict, dict, dict]:
         raise PrscError(f"scene {scene.get('spec', '?')} #{scene.get('index', '?')} does not fit pick_place: "
                         f"it needs one Robot, two Trays and one Cube (found {counts})")
     robot, cube = found["Robot"][0], found["Cube"][0]
-    if robot.get("model") != "panda":
-        raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}; pick_place drives a Panda")
+    require_arm(robot, "pick_place drives an arm with a gripper")
     source, target = sorted(found["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
     return robot, cube, source, target
 
@@ -42,7 +41,8 @@ class PickPlace:
         """One episode: the outcome, why, and how far the cube ended from the target tray's centre."""
         robot, cube_obj, _, target = _roles(scene)
         sim = Simulation(model, data)
-        arm = Arm.from_scene(model, data, robot["body"])
+        arm = Arm.of(robot, model, data)
+        sim.command_gripper(arm, closed=False)
         cube = HeldCube(sim, cube_obj)
         sim.wait(0.3)  # the objects settle onto their supports
         place = cube.release_point(target)
@@ -61,7 +61,7 @@ class PickPlace:
 
     @staticmethod
     def check(scene: dict) -> None:
-        """Refuse a scene without one Panda, two Trays and one Cube."""
+        """Refuse a scene without one arm, two Trays and one Cube."""
         _roles(scene)
 
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from prsc.assets.articulated import robot_model
 from prsc.errors import PrscError
 from prsc.geometry.rotations import quat_to_matrix
 
@@ -43,8 +44,18 @@ def objects_by_class(scene: dict, wanted: tuple[str, ...]) -> dict[str, list[dic
     return found
 
 
+def require_arm(robot: dict, needs: str) -> None:
+    """Refuse a Robot whose model is no arm (PrscError saying what the controller `needs`)."""
+    if robot_model(robot.get("model")) is None:
+        raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}, which is no arm: {needs} "
+                        "(the built-in arm, or a URDF or MJCF arm)")
+
+
 def find_roles(scene: dict) -> Roles:
     """Pick the two Robots (left/right by x), source/target Tray, the Cube and the Camera.
+
+    Each Robot must be an arm (the built-in arm, or a URDF or MJCF arm); whether it has a
+    gripper is seen in the compiled model (prsc/runner/motion.py's `Arm.of`).
 
     An object fills a role when its class or one of its ancestors (the scene's `classes`
     map, e.g. `RedCube(Cube)`) is the role's class.
@@ -67,8 +78,7 @@ def find_roles(scene: dict) -> Roles:
         )
     robots = sorted(by_class["Robot"], key=lambda o: o["position"][0])
     for robot in robots:
-        if robot.get("model") != "panda":
-            raise PrscError(f"Robot {robot['name']!r} has model {robot.get('model')!r}; the runner drives Pandas only")
+        require_arm(robot, "the handover drives two arms with grippers")
     cube = by_class["Cube"][0]
     trays = sorted(by_class["Tray"], key=lambda t: (footprint_distance(t, cube["position"]), t["name"]))
     return Roles(

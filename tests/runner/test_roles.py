@@ -36,9 +36,11 @@ def test_missing_roles_are_named(table_cube):
     assert "Robot" not in message.split("needs")[1].split(";")[0]
 
 
-def test_non_panda_robot_is_refused(table_cube):
+def test_a_robot_that_is_no_arm_is_refused(table_cube):
+    """Any arm fills a robot's role (tests/runner/test_handover_any_arm.py); a model that names
+    neither the built-in arm nor an arm's file does not."""
     table_cube["objects"][1]["model"] = "ur5"
-    with pytest.raises(PrscError, match="Pandas only"):
+    with pytest.raises(PrscError, match="has model 'ur5', which is no arm: the handover drives two arms with grippers"):
         find_roles(table_cube)
 
 
