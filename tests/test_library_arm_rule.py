@@ -11,11 +11,6 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 PANDA = re.compile(r"panda(?!s)", re.IGNORECASE)
 ALLOWED = {"prsc/library"}  # the model library: the class and the data naming the file
-# Until branch `handover` merges: the runner's handover still reads the Panda's names through
-# this shim (assets/panda.py, itself read off the library's data); that branch rewrites these
-# files against the generic arm interface and deletes the shim and runner/ik.py. Empty it then.
-UNTIL_HANDOVER_MERGES = {"assets/panda.py", "prsc/runner/motion.py", "prsc/runner/ik.py", "prsc/runner/grasping.py",
-                         "prsc/runner/handover.py", "prsc/runner/roles.py", "prsc/runner/pick_place.py"}
 
 
 def _named(repo: Path = REPO) -> list[str]:
@@ -24,8 +19,6 @@ def _named(repo: Path = REPO) -> list[str]:
         for path in sorted((repo / folder).rglob("*")):
             relative = path.relative_to(repo).as_posix()
             if not path.is_file() or path.suffix == ".pyc" or any(relative.startswith(a + "/") for a in ALLOWED):
-                continue
-            if relative in UNTIL_HANDOVER_MERGES:
                 continue
             for number, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
                 if PANDA.search(line) or PANDA.search(path.name):

@@ -29,14 +29,6 @@ def test_compiled_scenes_carry_the_options_and_the_runner_keeps_them(tmp_path):
     assert edited.opt.timestep == 0.001 and edited.opt.impratio == 3.0
 
 
-def test_the_robot_model_uses_the_same_options():
-    from prsc.assets.panda import panda_mjcf_spec
-
-    option = panda_mjcf_spec().compile().opt
-    assert option.timestep == TIMESTEP and option.impratio == IMPRATIO
-    assert option.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
-
-
 def _sources() -> dict[str, str]:
     from pathlib import Path
 
