@@ -35,7 +35,7 @@ from prsc.assets.simulation import set_simulation_options
 from prsc.backends.inertia import PRIMITIVES
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, light_directions, resolve_bodies
 from prsc.backends.numbers import num, nums
-from prsc.backends.scene import Scene
+from prsc.backends.scene import GROUND_HALF_SIZE, Scene
 from prsc.backends.scene_structure import scene_structure, template_key
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
@@ -244,7 +244,8 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
         name="prsc_grid", type=mujoco.mjtTexture.mjTEXTURE_2D, builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
         rgb1=[0.82, 0.82, 0.80], rgb2=[0.72, 0.72, 0.70], width=256, height=256,
     )
-    material = spec.add_material(name="prsc_grid", texrepeat=[8, 8], reflectance=0.0)
+    # texuniform: the checker repeats per metre (8 per 2 m) on the finite ground, as on an infinite one.
+    material = spec.add_material(name="prsc_grid", texrepeat=[8, 8], texuniform=True, reflectance=0.0)
     material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "prsc_grid"
     spec.worldbody.add_light(
         name="prsc_sun", type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL, pos=[0, 0, 4], dir=[0.2, 0.3, -1],
@@ -252,8 +253,8 @@ def _scene_spec(scene: Scene, bodies: tuple[Body, ...]):
     )
     if scene.ground:
         spec.worldbody.add_geom(
-            name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="prsc_grid",
-            friction=list(FRICTION), solref=list(SOLREF),
+            name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[GROUND_HALF_SIZE, GROUND_HALF_SIZE, 0.05],
+            material="prsc_grid", friction=list(FRICTION), solref=list(SOLREF),
         )
     for body in bodies:
         obj = body.obj

@@ -23,6 +23,11 @@ class CameraSpec:
 
 
 LIGHT_KINDS = ("directional", "spot")
+GROUND_HALF_SIZE = 10.0
+"""Metres: half the edge of the ground in every format. Finite, so that a MuJoCo render context's
+grid of the ground does not depend on stat.extent and a renderer kept across scenes is never made
+again (docs/learning.md, "Renderers kept across resets"); a MuJoCo plane collides as an infinite
+one whatever its size. Not larger: a plane counts in stat.extent with a tenth of its size."""
 
 
 @dataclass(frozen=True)

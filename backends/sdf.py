@@ -41,7 +41,7 @@ from prsc.backends.gazebo_camera import camera_sensor_body
 from prsc.backends.inertia import Inertial
 from prsc.backends.mjcf import FRICTION
 from prsc.backends.numbers import num, nums
-from prsc.backends.scene import Scene
+from prsc.backends.scene import GROUND_HALF_SIZE, Scene
 from prsc.assets.articulated import RobotModel, check_robot_name, robot_tree
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
@@ -257,7 +257,7 @@ def _ground_model(world: ET.Element, name: str) -> None:
         element = ET.SubElement(link, tag, name=tag)
         plane = ET.SubElement(ET.SubElement(element, "geometry"), "plane")
         ET.SubElement(plane, "normal").text = "0 0 1"
-        ET.SubElement(plane, "size").text = "100 100"
+        ET.SubElement(plane, "size").text = nums((2 * GROUND_HALF_SIZE, 2 * GROUND_HALF_SIZE))
         if tag == "collision":
             _surface(element)
         else:

@@ -23,13 +23,12 @@ from prsc.backends.bodies import Body, light_directions, resolve_bodies
 from prsc.backends.gazebo_camera import camera_sensor_body
 from prsc.backends.inertia import Inertial
 from prsc.backends.numbers import num, nums
-from prsc.backends.scene import Scene
+from prsc.backends.scene import GROUND_HALF_SIZE, Scene
 from prsc.assets.articulated import RobotModel, check_robot_name
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.xmltext import element_text, placeholder, serialise
 from prsc.geometry.rotations import quat_to_rpy
 
-GROUND_SIZE = 50.0  # metres: edge of the ground slab
 GROUND_THICKNESS = 0.1
 
 
@@ -150,7 +149,7 @@ def _ground_urdf() -> ET.Element:
         element = ET.SubElement(link, tag, name="slab")
         _origin(element, (0.0, 0.0, -GROUND_THICKNESS / 2))
         geometry = ET.SubElement(element, "geometry")
-        ET.SubElement(geometry, "box", size=nums((GROUND_SIZE, GROUND_SIZE, GROUND_THICKNESS)))
+        ET.SubElement(geometry, "box", size=nums((2 * GROUND_HALF_SIZE, 2 * GROUND_HALF_SIZE, GROUND_THICKNESS)))
         if tag == "visual":
             material = ET.SubElement(element, "material", name="ground")
             ET.SubElement(material, "color", rgba="0.8 0.8 0.78 1")

@@ -20,12 +20,11 @@ import numpy as np
 
 from prsc.assets.articulated import robot_tree
 from prsc.backends.bodies import CAMERA_QUAT_NEG_Z, Body, object_matrix, resolve_bodies
-from prsc.backends.scene import Scene
+from prsc.backends.scene import GROUND_HALF_SIZE, Scene
 from prsc.backends.store import AssetStore, relative_path
 from prsc.backends.uv_meshes import unit_uv_mesh
 from prsc.geometry.rotations import matrix_to_quat, rot_z
 
-GROUND_HALF_SIZE = 50.0
 CAMERA_VERTICAL_APERTURE = 20.955  # mm, USD's default; the focal length sets the fov
 
 

@@ -64,30 +64,41 @@ def camera_views(model, asked: str | Mapping[str, str | Sequence[str]]) -> tuple
 
 
 class Renderers:
-    """One `mujoco.Renderer` per image size for a model, made when first asked for, its render
-    context made again when the model's context inputs changed (a reset's new stat.extent)."""
+    """One `mujoco.Renderer` per image size for a model, made when first asked for; its render
+    context made again when the model's context inputs changed, and given the numbers derived
+    from stat.extent in place when only those did (a reset's new stat.extent)."""
 
     def __init__(self, model) -> None:
         self.model = model
         self._by_size: dict[tuple[int, int], Any] = {}
-        self._made_at: dict[tuple[int, int], tuple] = {}  # context inputs each renderer's context was made with
+        self._made_at: dict[tuple[int, int], tuple] = {}  # (context inputs, patch) each renderer's context has
         self.remade = 0  # render contexts made again since the renderers were made
+        self.patched = 0  # render contexts given another extent's numbers in place
 
     def get(self, height: int, width: int):
         """The renderer of this size, rendering what a fresh renderer of the model as it is now renders."""
         import mujoco
 
-        from prsc.runner.rendering import context_inputs
+        from prsc.runner.rendering import context_inputs, context_patch, patch_context
 
         size = (height, width)
-        inputs = context_inputs(self.model)
+        state = (context_inputs(self.model), context_patch(self.model))
         renderer = self._by_size.get(size)
         if renderer is None:
             renderer = self._by_size[size] = mujoco.Renderer(self.model, height, width)
-        elif self._made_at[size] != inputs:
+        elif self._made_at[size][0] != state[0]:
             renderer = self._by_size[size] = _remade(renderer, self.model, height, width)
             self.remade += 1
-        self._made_at[size] = inputs
+        elif self._made_at[size][1] != state[1]:
+            gl, context = getattr(renderer, "_gl_context", None), getattr(renderer, "_mjr_context", None)
+            if isinstance(context, mujoco.MjrContext) and gl is not None:
+                gl.make_current()
+                patch_context(context, state[1])
+                self.patched += 1
+            else:  # not the renderer's parts we know: a new renderer
+                renderer = self._by_size[size] = _remade(renderer, self.model, height, width)
+                self.remade += 1
+        self._made_at[size] = state
         return renderer
 
     def render(self, data, camera: Any, height: int, width: int, channel: str = "rgb") -> np.ndarray:

@@ -4,9 +4,10 @@ A MuJoCo render context (MjrContext) holds what the GPU side needs of a model: i
 meshes, textures, height fields, skins and materials' textures, plane grids, buffer
 sizes. Uploading an arm's meshes costs about 0.1 CPU s, so a worker keeps the context
 of the last model and hands it to the next model with the same render assets and the same
-`context_inputs` (the numbers a context bakes in: stat.extent sets the ground's grid, the
-shadow clip and the fog). The images are the same bits a fresh context renders
-(tests/runner/test_rendering.py); `prsc.SceneEnv`'s renderers compare the same inputs.
+`context_inputs` (the numbers a context bakes in), after setting the numbers it derives from
+stat.extent, which differs from scene to scene (`context_patch`: the shadow clip and the fog
+range). The images are the same bits a fresh context renders (tests/runner/test_rendering.py,
+tests/api/test_renderer_reuse.py); `prsc.SceneEnv`'s renderers follow the same rule.
 """
 
 from __future__ import annotations
@@ -115,26 +116,58 @@ PLANE = int(mujoco.mjtGeom.mjGEOM_PLANE)  # an int: numpy compares an array with
 
 
 def context_inputs(model: mujoco.MjModel) -> tuple:
-    """The numbers of a model a render context bakes in when made, besides its assets: what
-    MuJoCo's mjr_makeContext (src/render/classic/render_context.c) reads that `scenario.apply`
-    or a user may change. stat.extent sets shadowClip, fogStart and fogEnd (the last two also as
-    GL state), and the grid of an infinite plane, the ground, which spans 2.1 * zfar * extent:
-    a context made at another extent draws the ground from other vertices, and a pixel or two
-    comes out one level off (docs/learning.md). Cheap: compared at every render."""
+    """The numbers of a model that a render context bakes in when made, besides its assets, and
+    that `scenario.apply` or a user may change: a context made with others must be made again.
+    MuJoCo's mjr_makeContext (src/render/classic/render_context.c) builds each plane's grid from
+    its size, or, along an infinite side, over 2.1 * zfar * stat.extent: then the extent is one
+    of them (a context made at another extent draws such a plane from other vertices, a pixel
+    or two one level off, docs/learning.md). prsc's ground is finite, so the extent is not; the
+    numbers it sets are `context_patch`'s. Cheap: compared at every render."""
     planes = model.geom_type == PLANE
     m, g = model.vis.map, model.vis.global_
-    return (float(model.stat.extent), m.zfar, m.shadowclip, m.shadowscale, m.fogstart, m.fogend,
-            tuple(model.vis.rgba.fog), g.linewidth, model.geom_size[planes].tobytes(),
-            model.geom_matid[planes].tobytes(), model.mat_texid.tobytes(), model.mat_texuniform.tobytes(),
-            model.mat_texrepeat.tobytes())
+    infinite = bool(np.any(model.geom_size[planes, :2] == 0))
+    return (float(model.stat.extent) if infinite else None, m.zfar, m.shadowscale, tuple(model.vis.rgba.fog),
+            g.linewidth, model.geom_size[planes].tobytes(), model.geom_matid[planes].tobytes(),
+            model.mat_texid.tobytes(), model.mat_texuniform.tobytes(), model.mat_texrepeat.tobytes())
+
+
+def context_patch(model: mujoco.MjModel) -> tuple[float, float, float]:
+    """The numbers a render context derives from stat.extent that a kept context takes in place:
+    (shadowClip, fogStart, fogEnd), as mjr_makeContext computes them (float32 of a double)."""
+    extent, m = float(model.stat.extent), model.vis.map
+    return tuple(float(np.float32(extent * float(v))) for v in (m.shadowclip, m.fogstart, m.fogend))
+
+
+def patch_context(context: mujoco.MjrContext, patch: tuple[float, float, float]) -> None:
+    """Give a kept render context the `context_patch` numbers of the model it renders now; its
+    GL context must be current. mjr_render reads shadowClip from the context but the fog range
+    from GL state, which mjr_makeContext sets (glFog), so both are set here."""
+    from OpenGL import GL  # MuJoCo's own GL backends use PyOpenGL, on the platform MuJoCo chose
+
+    context.shadowClip, context.fogStart, context.fogEnd = patch
+    GL.glFogf(GL.GL_FOG_START, context.fogStart)
+    GL.glFogf(GL.GL_FOG_END, context.fogEnd)
+
+
+_counts = {"contexts made": 0, "contexts patched": 0}  # this process's counts, for benchmarks
+
+
+def context_counts() -> dict[str, int]:
+    """How many render contexts this process made and patched in place (`_render_context`)."""
+    return dict(_counts)
 
 
 def _render_context(model: mujoco.MjModel) -> mujoco.MjrContext:
-    """This worker's render context for a model: the kept one when the render assets match, else a new one."""
+    """This worker's render context for a model: the kept one when the render assets and
+    `context_inputs` match (patched to the model's `context_patch`), else a new one."""
     global _kept
     key = (_render_key(model), context_inputs(model))
     if _kept is not None and _kept[0] == key:
         context = _kept[1]
+        patch = context_patch(model)
+        if patch != (context.shadowClip, context.fogStart, context.fogEnd):
+            patch_context(context, patch)
+            _counts["contexts patched"] += 1
     else:
         if _kept is not None:
             _kept[1].free()
@@ -145,6 +178,7 @@ def _render_context(model: mujoco.MjModel) -> mujoco.MjrContext:
             raise InfrastructureError(f"no offscreen OpenGL rendering with MUJOCO_GL={os.environ.get('MUJOCO_GL', '')!r} "
                                       f"(MuJoCo: {str(error).strip()}); unset MUJOCO_GL to let prsc choose "
                                       "EGL or OSMesa") from None
+        _counts["contexts made"] += 1
         _kept = (key, context)
     mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN.value, context)
     context.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR

@@ -30,7 +30,10 @@ def test_a_kept_render_context_renders_what_a_fresh_one_does(tmp_path):
     models = [load_model(tmp_path / "table_cube" / "mjcf" / f"0000{k}.xml") for k in range(3)]
     assert len({rendering._render_key(m) for m in models}) == 1  # one context serves every scene of the spec
     camera = mujoco.mj_name2id(models[0], mujoco.mjtObj.mjOBJ_CAMERA, "camera")
+    counts = rendering.context_counts()
     kept = [_images(m, camera) for m in models]  # scene 0's context, reused for 1 and 2
+    made, patched = (rendering.context_counts()[k] - counts[k] for k in ("contexts made", "contexts patched"))
+    assert made <= 1 and patched == 2  # three extents, one context
     for model, (rgb, depth) in zip(models, kept):
         rendering._kept = None  # the next context is made fresh for this model
         fresh_rgb, fresh_depth = _images(model, camera)
