@@ -29,9 +29,9 @@ REACH_APPROACH = 0.12
 RESTARTS = 4  # starts drawn within the joint limits where home's fail: a 7-joint arm's IK from
 # home alone misses a third of the points it reaches top-down (KUKA iiwa: 109 of 150 found)
 # A solve whose error has not fallen by STALL_GAIN in STALL_ITERATIONS steps has stalled (at a joint
-# limit or a singular pose): most solves of a reach build fail (5,000 of 8,400). mink's steps
-# cost ~8x the hand-written DLS's; 10 steps keep the xArm6's ring (97.7 % of its reach, 0 points
-# unreached) and build it in 10 s of CPU against 15 s with 20.
+# limit or a singular pose): most solves of a reach build fail (5,000 of 8,400), and a mink step is
+# a QP; 10 steps keep the xArm6's ring (97.7 % of its reach, 0 points unreached) and build it in
+# 10 s of CPU against 15 s with 20 (docs/assets.md, "The IK").
 STALL_ITERATIONS = 10
 STALL_GAIN = 0.01
 
