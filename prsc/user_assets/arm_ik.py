@@ -1,9 +1,10 @@
 """Top-down IK for any arm in any MuJoCo model (docs/assets.md): mink's differential IK on the
 arm's joints (prsc/user_assets/arm_qp.py: a FrameTask within the joints' limits, every other
 joint of the model held) that puts its tool frame at a point with the tool's +z straight down,
-any yaw, or also a given yaw (`facing`). It is the one IK of prsc: the reach cell of
-`reachable by` (prsc/constraints/arm_reach.py) is built with it on the arm alone, and the
-controllers (prsc/runner/visit.py, pick.py) run it on a scratch copy of the compiled scene.
+any yaw, or also a given yaw (`facing`), or at any given rotation (`solve_pose`). It is the one
+IK of prsc: the reach cell of `reachable by` (prsc/constraints/arm_reach.py) is built with it on
+the arm alone, and the controllers (prsc/runner/visit.py, pick.py) run it on a scratch copy of
+the compiled scene.
 """
 
 from __future__ import annotations
@@ -53,28 +54,24 @@ def down_quaternion(rotation: np.ndarray) -> np.ndarray:
     return turned_quaternion
 
 
-def facing_quaternion(facing: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """The quaternion (wxyz) of the tool pointing down with its vector `facing[0]` (horizontal in
-    the tool's frame) along the horizontal world direction `facing[1]`."""
-    import mujoco
-
+def facing_rotation(facing: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The tool's rotation pointing down with its vector `facing[0]` (horizontal in the tool's
+    frame) along the horizontal world direction `facing[1]`."""
     tool_vector = np.asarray(facing[0], float) / np.linalg.norm(facing[0])
     direction = np.asarray(facing[1], float) / np.linalg.norm(facing[1])
     in_tool = np.column_stack([tool_vector, np.cross([0.0, 0.0, 1.0], tool_vector), [0.0, 0.0, 1.0]])
     in_world = np.column_stack([direction, np.cross(DOWN, direction), DOWN])
-    quaternion = np.empty(4)
-    mujoco.mju_mat2Quat(quaternion, (in_world @ in_tool.T).ravel())
-    return quaternion
+    return in_world @ in_tool.T
 
 
-def _miss(arm: ArmFrames, data, goal: np.ndarray, facing) -> tuple[float, float]:
-    """How far the tool is from `goal` (m) and from pointing down (and along `facing`) (rad)."""
+def _miss(arm: ArmFrames, data, goal: np.ndarray, wanted: np.ndarray | None) -> tuple[float, float]:
+    """How far the tool is from `goal` (m), and its rotation from `wanted` (rad), or from pointing down."""
     position, rotation = arm.tool_pose(data)
-    tilt = math.acos(min(1.0, max(-1.0, -rotation[2, 2])))
-    if facing is not None:
-        pointing = rotation @ facing[0]
-        tilt += math.acos(min(1.0, max(-1.0, float(pointing @ facing[1]))))
-    return float(np.linalg.norm(goal - position)), tilt
+    if wanted is None:
+        angle = math.acos(min(1.0, max(-1.0, -rotation[2, 2])))
+    else:
+        angle = math.acos(min(1.0, max(-1.0, (float(np.sum(rotation * wanted)) - 1.0) / 2.0)))
+    return float(np.linalg.norm(goal - position)), angle
 
 
 def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
@@ -88,6 +85,21 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
     Solved by mink (prsc/user_assets/arm_qp.py) from `data`'s other joints; writes the answer
     to `data.qpos` of the arm's joints, with its kinematics (other joints stay): call it on a
     scratch MjData."""
+    return _solve(model, data, arm, np.asarray(goal, float), q, None if facing is None else facing_rotation(facing),
+                  iterations)
+
+
+def solve_pose(model, data, arm: ArmFrames, goal: np.ndarray, rotation: np.ndarray, q: np.ndarray,
+               iterations: int = ITERATIONS) -> tuple[np.ndarray, bool]:
+    """(arm joint values, reached) for the tool at world point `goal` with world rotation matrix
+    `rotation` (any orientation), from `q`; reached within POSITION_TOLERANCE and
+    ANGLE_TOLERANCE. Writes `data` as `solve_top_down` does."""
+    return _solve(model, data, arm, np.asarray(goal, float), q, np.asarray(rotation, float), iterations)
+
+
+def _solve(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray, wanted: np.ndarray | None,
+           iterations: int) -> tuple[np.ndarray, bool]:
+    """mink's steps towards the tool at `goal` with rotation `wanted`, or pointing down at any yaw (None)."""
     import mujoco
 
     from prsc.user_assets.arm_qp import ArmProblem
@@ -96,29 +108,29 @@ def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
     configuration = problem.configuration
     qpos = data.qpos.copy()
     qpos[arm.qpos] = np.clip(np.array(q, float), arm.lower, arm.upper)
-    problem.start(qpos, free_yaw=facing is None)
+    problem.start(qpos, free_yaw=wanted is None)
     target = np.concatenate([np.zeros(4), goal])
-    if facing is not None:
-        target[:4] = facing_quaternion(facing)
+    if wanted is not None:
+        mujoco.mju_mat2Quat(target[:4], wanted.ravel())
     best, since_best = math.inf, 0
     for _ in range(iterations):
-        miss, tilt = _miss(arm, configuration.data, goal, facing)
-        if miss < CONVERGED_POSITION and tilt < CONVERGED_ANGLE:
+        miss, angle = _miss(arm, configuration.data, goal, wanted)
+        if miss < CONVERGED_POSITION and angle < CONVERGED_ANGLE:
             break
-        if miss + tilt < best * (1 - STALL_GAIN):
-            best, since_best = miss + tilt, 0
+        if miss + angle < best * (1 - STALL_GAIN):
+            best, since_best = miss + angle, 0
         else:
             since_best += 1
             if since_best == STALL_ITERATIONS:
                 break
-        if facing is None:  # the pose as it stands, turned down: its yaw is free
+        if wanted is None:  # the pose as it stands, turned down: its yaw is free
             target[:4] = down_quaternion(arm.tool_pose(configuration.data)[1])
         problem.step(target)
     q = np.clip(configuration.q[arm.qpos], arm.lower, arm.upper)
     data.qpos[arm.qpos] = q
     mujoco.mj_kinematics(model, data)
-    miss, tilt = _miss(arm, data, goal, facing)
-    return q, miss < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE
+    miss, angle = _miss(arm, data, goal, wanted)
+    return q, miss < POSITION_TOLERANCE and angle < ANGLE_TOLERANCE
 
 
 def turned(home: np.ndarray, arm: ArmFrames, heading: float, azimuth: float) -> np.ndarray:

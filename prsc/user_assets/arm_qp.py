@@ -26,7 +26,9 @@ LM_DAMPING = 1e-3  # the task's damping, times its squared error: large steps fa
 LIMIT_GAIN = 0.95  # the share of the distance to a limit one step may cover (mink's ConfigurationLimit's)
 FREE_YAW = (1.0, 1.0, 0.0)  # orientation costs about the tool's x, y, z: the turn about its own axis is free
 FIXED_YAW = (1.0, 1.0, 1.0)
-CACHED = 4  # problems kept (one per model and arm; each holds its model and an MjData): an episode's controller reuses its own every solve
+# Problems kept (one per model and arm; each holds its model and an MjData): an episode's
+# controller reuses its own every solve.
+CACHED = 4
 
 
 class ArmLimit(mink.Limit):
