@@ -131,7 +131,7 @@ def test_the_ik_reaches_top_down_points_of_held_out_arms_to_a_tenth_of_a_mm(path
     """Points the tool reaches top-down (random joint values within the limits, turned exactly
     down by scipy and kept with every link above the base) are reached by `reach_top_down` as
     `reachable by` asks it, each well inside the 2 mm tolerance: mink goes on to 0.1 mm (the
-    hand-written damped least squares stopped at the tolerance: median 0.4-1.1 mm)."""
+    hand-written damped least squares stopped at the tolerance: median 0.2-1.8 mm)."""
     import mujoco
     from scipy.optimize import least_squares
 
