@@ -5,9 +5,10 @@ and tool frame in the build folder (`$PRSC_BUILD_DIR/reach/<key>-<tool>-v<recipe
 second compile costs nothing.
 
 Top-down means the tool frame's +z (the flange normal of a URDF arm's last link, or the
-`tcp` site's z) points straight down, any yaw. A point counts as reached when a damped
-least-squares IK on the arm's MuJoCo model brings the tool there within 2 mm and 0.02 rad,
-and also 12 cm above it (the approach). Along each ray from the base (SECTORS all the way
+`tcp` site's z) points straight down, any yaw. A point counts as reached when the one IK
+(prsc/user_assets/arm_ik.py, mink on the arm's MuJoCo model) brings the tool there within 2 mm
+and 0.02 rad, and also 12 cm above it (the approach), by poses that keep the arm above its base
+and out of itself. Along each ray from the base (SECTORS all the way
 round, in the object's axes: the file's +x, the ROS forward, turned to the object's ahead,
 +y, by asset_spec) and at each height (HEIGHTS
 above the root's origin) the reachable radii are scanned every STEP and both ends bisected
@@ -33,7 +34,7 @@ from prsc.user_assets.asset_files import ArticulatedAsset, asset_spec, build_roo
 from prsc.files import atomic_write
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "10"  # 10: a pose that puts a link into another is no reach; the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK (prsc/user_assets/arm_ik.py), the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "11"  # 11: the one IK, mink's (prsc/user_assets/arm_ik.py), which refuses poses that put a link into another; the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK, the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees

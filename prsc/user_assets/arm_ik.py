@@ -1,19 +1,27 @@
-"""Top-down IK for any arm in any MuJoCo model (docs/assets.md): damped least squares on
-the arm's joints that puts its tool frame at a point with the tool's +z straight down, any
-yaw. The reach cell of `reachable by` (prsc/constraints/arm_reach.py) is built with it on
-the arm alone, and the example controller for any arm (prsc/runner/visit.py) runs
-it on the compiled scene. Foundation module: mujoco is imported by the caller's model.
+"""Top-down IK for any arm in any MuJoCo model (docs/assets.md): mink's differential IK on the
+arm's joints (prsc/user_assets/arm_qp.py: a FrameTask within the joints' limits, every other
+joint of the model held) that puts its tool frame at a point with the tool's +z straight down,
+any yaw, or also a given yaw (`facing`), or at any given rotation (`solve_pose`). It is the one
+IK of prsc: the reach cell of `reachable by` (prsc/constraints/arm_reach.py) is built with it on
+the arm alone, and the controllers (prsc/runner/visit.py, pick.py) run it on a scratch copy of
+the compiled scene.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-POSITION_TOLERANCE = 0.002  # m
-ANGLE_TOLERANCE = 0.02  # rad
+from prsc.user_assets.arm_frames import ArmFrames
+
+POSITION_TOLERANCE = 0.002  # m: reached means within this of the point
+ANGLE_TOLERANCE = 0.02  # rad: and the tool's axes within this of the wanted ones
+# A solve goes on past the tolerances to these (a few more steps of a quadratically converging
+# method): the controllers' waypoints then lie a few hundredths of a mm from the points.
+CONVERGED_POSITION = 1e-4  # m
+CONVERGED_ANGLE = 1e-3  # rad
+ITERATIONS = 80  # mink steps a solve may take
 DOWN = np.array([0.0, 0.0, -1.0])
 # m above a point where the tool must also stand top-down for the point to count as reached:
 # what `reachable by` certifies for a file arm (constraints/arm_reach.py) and where the example
@@ -21,123 +29,108 @@ DOWN = np.array([0.0, 0.0, -1.0])
 REACH_APPROACH = 0.12
 RESTARTS = 4  # starts drawn within the joint limits where home's fail: a 7-joint arm's IK from
 # home alone misses a third of the points it reaches top-down (KUKA iiwa: 109 of 150 found)
-STALL_ITERATIONS = 20  # a solve whose error has not fallen by STALL_GAIN in this many steps has stalled
-STALL_GAIN = 0.01  # (at a joint limit or a singular pose); most failing solves stall, and ran 80 steps
-BELOW_BASE = 0.02  # m a link's origin may sink below the base's: UR arms' elbow-down answers went 0.2 m into the table
-LIMIT_MARGIN = 0.02  # rad or m kept from every joint limit: a simulated servo held against its
-# limit stops short of it (the limit constraint is soft), so a pose at a limit would miss.
+# A solve whose error has not fallen by STALL_GAIN in STALL_ITERATIONS steps has stalled (at a joint
+# limit or a singular pose): most solves of a reach build fail (5,000 of 8,400), and a mink step is
+# a QP; 10 steps keep the xArm6's ring (97.7 % of its reach, 0 points unreached) and build it in
+# 10 s of CPU against 15 s with 20 (docs/assets.md, "The IK").
+STALL_ITERATIONS = 10
+STALL_GAIN = 0.01
 
 
-@dataclass(frozen=True)
-class ArmFrames:
-    """Where an arm lives in a model: its joints' qpos and dof addresses and its tool."""
+def down_quaternion(rotation: np.ndarray) -> np.ndarray:
+    """The quaternion (wxyz) of `rotation` turned the least way that points its +z straight down (its yaw kept)."""
+    import mujoco
 
-    qpos: np.ndarray  # qpos address of each arm joint (hinge or slide), in order
-    dofs: np.ndarray  # dof address of each
-    lower: np.ndarray  # joint limits less LIMIT_MARGIN (-inf/inf when unlimited)
-    upper: np.ndarray
-    tool: int  # site id or body id
-    tool_is_site: bool
-    bodies: tuple[int, ...] = ()  # the bodies the joints move (each joint's body)
-    base: int = 0  # the body the first joint's body hangs from: the arm's base
-
-    @staticmethod
-    def of(model, joints: list[str], tool: str) -> "ArmFrames":
-        """The frames of joints `joints` and tool `tool` (a site, else a body) of `model`."""
-        ids = [model.joint(name).id for name in joints]
-        limited = model.jnt_limited[ids].astype(bool)
-        try:
-            tool_id, is_site = model.site(tool).id, True
-        except KeyError:
-            tool_id, is_site = model.body(tool).id, False
-        low, high = model.jnt_range[ids, 0], model.jnt_range[ids, 1]
-        # A range narrower than both margins (gym-aloha's vx300s has one) is held at its middle.
-        middle = (low + high) / 2
-        return ArmFrames(
-            qpos=model.jnt_qposadr[ids].copy(), dofs=model.jnt_dofadr[ids].copy(),
-            lower=np.where(limited, np.minimum(low + LIMIT_MARGIN, middle), -np.inf),
-            upper=np.where(limited, np.maximum(high - LIMIT_MARGIN, middle), np.inf),
-            tool=tool_id, tool_is_site=is_site,
-            bodies=tuple(int(model.jnt_bodyid[j]) for j in ids), base=int(model.body_parentid[model.jnt_bodyid[ids[0]]]),
-        )
-
-    def above_base(self, data) -> bool:
-        """Whether every body the joints move has its origin above the base's, less BELOW_BASE
-        (after kinematics): an arm standing on a table keeps its links out of the table."""
-        floor = data.xpos[self.base, 2] - BELOW_BASE
-        return bool(all(data.xpos[body, 2] >= floor for body in self.bodies))
-
-    def heading(self, data, root: np.ndarray) -> float:
-        """The azimuth of the tool about the point `root` (the arm's root) in `data` (after kinematics)."""
-        tool = self.tool_pose(data)[0] - root
-        return math.atan2(tool[1], tool[0])
-
-    def tool_pose(self, data) -> tuple[np.ndarray, np.ndarray]:
-        """The tool's world position and rotation matrix in `data` (after kinematics)."""
-        if self.tool_is_site:
-            return data.site_xpos[self.tool].copy(), data.site_xmat[self.tool].reshape(3, 3).copy()
-        return data.xpos[self.tool].copy(), data.xmat[self.tool].reshape(3, 3).copy()
+    axis = rotation[:, 2]
+    sine, cosine = math.hypot(axis[0], axis[1]), -axis[2]  # the turn's axis is axis x DOWN = (-y, x, 0)
+    if sine < 1e-9:  # down already, or straight up: then half a turn about the tool's x
+        turn = np.array([1.0, 0.0, 0.0, 0.0]) if cosine > 0 else np.array([0.0, *rotation[:, 0]])
+    else:
+        half = math.atan2(sine, cosine) / 2
+        turn = np.array([math.cos(half), -axis[1] * math.sin(half) / sine, axis[0] * math.sin(half) / sine, 0.0])
+    current, turned_quaternion = np.empty(4), np.empty(4)
+    mujoco.mju_mat2Quat(current, rotation.ravel())
+    mujoco.mju_mulQuat(turned_quaternion, turn, current)
+    return turned_quaternion
 
 
-DAMPING = 1e-4 * np.eye(6)  # of the damped least-squares step
+def facing_rotation(facing: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The tool's rotation pointing down with its vector `facing[0]` (horizontal in the tool's
+    frame) along the horizontal world direction `facing[1]`."""
+    tool_vector = np.asarray(facing[0], float) / np.linalg.norm(facing[0])
+    direction = np.asarray(facing[1], float) / np.linalg.norm(facing[1])
+    in_tool = np.column_stack([tool_vector, np.cross([0.0, 0.0, 1.0], tool_vector), [0.0, 0.0, 1.0]])
+    in_world = np.column_stack([direction, np.cross(DOWN, direction), DOWN])
+    return in_world @ in_tool.T
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """np.cross of two 3-vectors, the same arithmetic at a twentieth of its cost (most of an IK step's)."""
-    a0, a1, a2 = a.tolist()
-    b0, b1, b2 = b.tolist()
-    return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0))
+def _miss(arm: ArmFrames, data, goal: np.ndarray, wanted: np.ndarray | None) -> tuple[float, float]:
+    """How far the tool is from `goal` (m), and its rotation from `wanted` (rad), or from pointing down."""
+    position, rotation = arm.tool_pose(data)
+    if wanted is None:
+        angle = math.acos(min(1.0, max(-1.0, -rotation[2, 2])))
+    else:
+        angle = math.acos(min(1.0, max(-1.0, (float(np.sum(rotation * wanted)) - 1.0) / 2.0)))
+    return float(np.linalg.norm(goal - position)), angle
 
 
 def solve_top_down(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray,
-                   iterations: int = 80, facing: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, bool]:
+                   iterations: int = ITERATIONS, facing: tuple[np.ndarray, np.ndarray] | None = None
+                   ) -> tuple[np.ndarray, bool]:
     """(arm joint values, reached) for the tool at world point `goal` pointing down, from `q`;
     `facing` (a horizontal vector in the tool's frame, a horizontal world direction) fixes the
     yaw too: the tool's vector then points along the direction (a gripper's closing axis
     across a box's faces).
 
-    Writes `data.qpos` of the arm's joints as it goes (other joints stay); call it on a
+    Solved by mink (prsc/user_assets/arm_qp.py) from `data`'s other joints; writes the answer
+    to `data.qpos` of the arm's joints, with its kinematics (other joints stay): call it on a
     scratch MjData."""
+    return _solve(model, data, arm, np.asarray(goal, float), q, None if facing is None else facing_rotation(facing),
+                  iterations)
+
+
+def solve_pose(model, data, arm: ArmFrames, goal: np.ndarray, rotation: np.ndarray, q: np.ndarray,
+               iterations: int = ITERATIONS) -> tuple[np.ndarray, bool]:
+    """(arm joint values, reached) for the tool at world point `goal` with world rotation matrix
+    `rotation` (any orientation), from `q`; reached within POSITION_TOLERANCE and
+    ANGLE_TOLERANCE. Writes `data` as `solve_top_down` does."""
+    return _solve(model, data, arm, np.asarray(goal, float), q, np.asarray(rotation, float), iterations)
+
+
+def _solve(model, data, arm: ArmFrames, goal: np.ndarray, q: np.ndarray, wanted: np.ndarray | None,
+           iterations: int) -> tuple[np.ndarray, bool]:
+    """mink's steps towards the tool at `goal` with rotation `wanted`, or pointing down at any yaw (None)."""
     import mujoco
 
-    jacp, jacr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
-    # Turning about the vertical keeps a top-down pose, so without `facing` that turn is free.
-    horizontal = np.eye(3) - np.outer(DOWN, DOWN) if facing is None else np.eye(3)
-    q = np.clip(np.array(q, float), arm.lower, arm.upper)
-    wanted_side = None if facing is None else _cross(DOWN, facing[1])  # the wanted frame's third axis
+    from prsc.user_assets.arm_qp import ArmProblem
+
+    problem = ArmProblem.of(model, arm)
+    configuration = problem.configuration
+    qpos = data.qpos.copy()
+    qpos[arm.qpos] = np.clip(np.array(q, float), arm.lower, arm.upper)
+    problem.start(qpos, free_yaw=wanted is None)
+    target = np.concatenate([np.zeros(4), goal])
+    if wanted is not None:
+        mujoco.mju_mat2Quat(target[:4], wanted.ravel())
     best, since_best = math.inf, 0
     for _ in range(iterations):
-        data.qpos[arm.qpos] = q
-        mujoco.mj_kinematics(model, data)
-        mujoco.mj_comPos(model, data)
-        position, rotation = arm.tool_pose(data)
-        error_p = goal - position
-        axis = rotation[:, 2]
-        miss, tilt = float(np.linalg.norm(error_p)), math.acos(min(1.0, max(-1.0, -axis[2])))
-        turn = _cross(axis, DOWN)
-        if facing is not None:
-            # The rotation from the tool's frame to the wanted one, from all three axes (half the
-            # sum of their cross products): the two given ones alone count a tilt twice.
-            pointing = rotation @ facing[0]
-            turn = 0.5 * (turn + _cross(pointing, facing[1]) + _cross(_cross(axis, pointing), wanted_side))
-            tilt += math.acos(min(1.0, max(-1.0, float(pointing @ facing[1]))))
-        if miss < POSITION_TOLERANCE and tilt < ANGLE_TOLERANCE:
-            return q, True
-        if miss + tilt < best * (1 - STALL_GAIN):
-            best, since_best = miss + tilt, 0
+        miss, angle = _miss(arm, configuration.data, goal, wanted)
+        if miss < CONVERGED_POSITION and angle < CONVERGED_ANGLE:
+            break
+        if miss + angle < best * (1 - STALL_GAIN):
+            best, since_best = miss + angle, 0
         else:
             since_best += 1
             if since_best == STALL_ITERATIONS:
-                return q, False
-        if arm.tool_is_site:
-            mujoco.mj_jacSite(model, data, jacp, jacr, arm.tool)
-        else:
-            mujoco.mj_jacBody(model, data, jacp, jacr, arm.tool)
-        jac = np.concatenate([jacp[:, arm.dofs], horizontal @ jacr[:, arm.dofs]])
-        error = np.concatenate([error_p, horizontal @ turn])
-        step = jac.T @ np.linalg.solve(jac @ jac.T + DAMPING, error)
-        q = np.clip(q + step, arm.lower, arm.upper)
-    return q, False
+                break
+        if wanted is None:  # the pose as it stands, turned down: its yaw is free
+            target[:4] = down_quaternion(arm.tool_pose(configuration.data)[1])
+        problem.step(target)
+    q = np.clip(configuration.q[arm.qpos], arm.lower, arm.upper)
+    data.qpos[arm.qpos] = q
+    mujoco.mj_kinematics(model, data)
+    miss, angle = _miss(arm, data, goal, wanted)
+    return q, miss < POSITION_TOLERANCE and angle < ANGLE_TOLERANCE
 
 
 def turned(home: np.ndarray, arm: ArmFrames, heading: float, azimuth: float) -> np.ndarray:
@@ -161,18 +154,19 @@ def random_starts(arm: ArmFrames, home: np.ndarray, count: int) -> list[np.ndarr
 
 def reach_top_down(model, data, arm: ArmFrames, goal: np.ndarray, seed: np.ndarray, home: np.ndarray,
                    approach: float, restarts: int = 0) -> tuple[np.ndarray, bool]:
-    """The point `approach` above `goal`, then `goal` itself, each top-down; from `seed`,
-    else from home and two bent starts (a straight-up home is singular for a top-down pose),
-    else from `restarts` starts drawn within the joint limits (the same ones every call)."""
+    """The point `approach` above `goal`, then `goal` itself, each top-down by a pose that fits
+    (`ArmFrames.fits`); from `seed`, else from home and two bent starts (a straight-up home is
+    singular for a top-down pose), else from `restarts` starts drawn within the joint limits
+    (the same ones every call)."""
     above = goal + np.array([0.0, 0.0, approach])
     bend = np.where(np.arange(len(home)) % 2, 0.5, -0.5)
     starts = [seed, home, home + bend, home - bend] if not np.array_equal(seed, home) else [home, home + bend, home - bend]
     starts += random_starts(arm, home, restarts)
     for start in starts:
         q, ok = solve_top_down(model, data, arm, above, start)
-        if ok and arm.above_base(data):
+        if ok and arm.fits(model, data):
             q, ok = solve_top_down(model, data, arm, goal, q)
-            if ok and arm.above_base(data):
+            if ok and arm.fits(model, data):
                 return nearest_turn(q, home, arm), True
     return seed, False
 
