@@ -48,15 +48,15 @@ def test_mjcf_follows_the_runner_naming(handmade):
     model = readback.mjcf_model(root / "mjcf" / "00000.xml")
     # Each name holds what the runner drives through it (a missing name is a KeyError already).
     for robot in ("r1", "r2"):
-        for name in [f"joint{i}" for i in range(1, 8)]:
+        for name in [f"panda_joint{i}" for i in range(1, 8)]:  # the library Panda: the URDF's names
             actuator = model.actuator(f"{robot}/{name}").id
             assert model.actuator_trntype[actuator] == mujoco.mjtTrn.mjTRN_JOINT
             assert model.joint(model.actuator_trnid[actuator, 0]).name == f"{robot}/{name}"
         gripper = model.actuator(f"{robot}/gripper").id
         assert model.actuator_trntype[gripper] == mujoco.mjtTrn.mjTRN_JOINT
-        assert model.joint(model.actuator_trnid[gripper, 0]).name == f"{robot}/finger_joint1"
-        assert model.body_parentid[model.body(f"{robot}/base").id] == model.body(robot).id
-        assert model.body(model.site(f"{robot}/tcp").bodyid[0]).name == f"{robot}/hand"
+        assert model.joint(model.actuator_trnid[gripper, 0]).name == f"{robot}/panda_finger_joint1"
+        assert model.body_parentid[model.body(f"{robot}/panda_link0").id] == model.body(robot).id
+        assert model.body(model.site(f"{robot}/tcp").bodyid[0]).name == f"{robot}/panda_hand"
     assert model.body(model.camera("camera").bodyid[0]).name == "camera"
     for o in scene["objects"]:
         body = model.body(o["name"])

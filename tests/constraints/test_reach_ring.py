@@ -128,6 +128,9 @@ class _ReachesBands:
         radius = float(np.hypot(point[0], point[1]))
         return seed, any(lo <= radius <= hi for lo, hi in self.bands)
 
+    def reaches_from_home(self, point) -> bool:
+        return self.reaches(point, None)[1]
+
     def turned(self, angle: float):
         return np.zeros(1)
 

@@ -109,11 +109,14 @@ def test_the_batched_law_is_the_sequential_sampler_s(sampler, reference):
     assert min(p) >= P_MIN, p
 
 
-def test_the_law_test_fails_on_simplices_drawn_without_their_areas(sampler, reference):
-    tray = sampler._batch.plan.objects[3]  # tr_1 on its free space: pieces of different areas
+def test_the_law_test_fails_on_simplices_drawn_with_wrong_weights(sampler, reference):
+    tray = sampler._batch.plan.objects[3]  # tr_1 on its free space: pieces weighted by their areas
     assert tray.name == "tr_1" and len(tray.region.measures) > 2
     wrong = Sampler(sampler.program, spec=SPEC)
-    wrong_tray = UniformSampler(tray.region.simplices, np.ones(len(tray.region.measures)))
+    # Table-Cube's pieces now have nearly equal areas (0.25 each), so drawing them without their
+    # areas is nearly right: the wrong law puts four times the weight on the first piece.
+    weights = np.asarray(tray.region.measures, dtype=float) * np.r_[4.0, np.ones(len(tray.region.measures) - 1)]
+    wrong_tray = UniformSampler(tray.region.simplices, weights)
     objects = list(wrong._batch.plan.objects)
     objects[3] = type(tray)(**{**tray.__dict__, "region": wrong_tray})
     object.__setattr__(wrong._batch.plan, "objects", tuple(objects))
