@@ -39,6 +39,18 @@ def _lock(handle: int) -> None:
     fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
 
 
+@contextlib.contextmanager
+def building(path: Path) -> Iterator[None]:
+    """Hold `<path>.lock` exclusively while the block builds what `path` will hold: another process
+    building the same file waits, then finds it built (the lock dies with its process)."""
+    handle = os.open(f"{path}.lock", os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(handle)
+
+
 def atomic_write(path: Path | str, data: bytes | str) -> None:
     """Write a file through a locked temporary sibling and a rename; on error nothing is left behind."""
     if isinstance(data, str):

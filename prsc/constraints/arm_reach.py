@@ -29,12 +29,12 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.user_assets.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, random_starts, reach_top_down, turned
+from prsc.user_assets.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, turned
 from prsc.user_assets.asset_files import ArticulatedAsset, asset_spec, build_root
-from prsc.files import atomic_write
+from prsc.files import atomic_write, building
 from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "11"  # 11: the one IK, mink's (prsc/user_assets/arm_ik.py), which refuses poses that put a link into another; the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK, the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "11"  # 11: the one IK, mink's (prsc/user_assets/arm_ik.py), which refuses poses that put a link into another (ArmFrames.fits, the one self-collision test); the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK, the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
@@ -51,7 +51,6 @@ EDGE_TOLERANCE = 0.01  # m an added ray's run may fall short of its reached neig
 MARGIN = 0.003
 INNER_MARGIN = 0.005
 INNER_CHECK = 0.005  # m steps outwards from an inner end a controller's IK does not find
-SELF_PENETRATION = 0.005  # m two of the arm's links may overlap in a reached pose (neighbours' meshes touch)
 
 
 @dataclass(frozen=True)
@@ -78,37 +77,13 @@ class TopDownIK:
         mujoco.mj_kinematics(self.model, self.data)
         self.root = self.data.xpos[self.model.body(asset.root).id].copy()
         self.heading = self.arm.heading(self.data, self.root)  # where the tool points at home
-        self.touching = self._contacts(-math.inf)  # pairs in contact at home: the file's own, not a collision
-
-    def _contacts(self, deeper_than: float) -> set[tuple[int, int]]:
-        """The pairs of the arm's bodies whose colliding geoms overlap by more than `deeper_than` (m)."""
-        import mujoco
-
-        mujoco.mj_fwdPosition(self.model, self.data)
-        bodies = self.model.geom_bodyid
-        return {tuple(sorted((int(bodies[c.geom1]), int(bodies[c.geom2])))) for c in self.data.contact[:self.data.ncon]
-                if -c.dist > deeper_than and bodies[c.geom1] and bodies[c.geom2]}  # type: ignore[misc]
-
-    def collides(self, q: np.ndarray) -> bool:
-        """Whether the pose puts one of the arm's links into another (beside the base the IK
-        otherwise puts the tool on a point with the hand inside the base)."""
-        self.data.qpos[self.arm.qpos] = q
-        return bool(self._contacts(SELF_PENETRATION) - self.touching)
 
     def reaches(self, point: np.ndarray, seed: np.ndarray, restarts: int = 0) -> tuple[np.ndarray, bool]:
         """Whether the tool reaches the point (root frame) and the approach above it, top-down,
-        from `seed`, else from home turned towards the point (and that bent), else from `restarts` more."""
+        from `seed`, else from home turned towards the point (and that bent), else from `restarts`
+        more; a pose with one link in another is no reach (the one IK's ArmFrames.fits)."""
         home = self.turned(math.atan2(point[1], point[0]))
-        goal = point + self.root
-        q, ok = reach_top_down(self.model, self.data, self.arm, goal, seed, home, APPROACH, restarts)
-        if not ok or not self.collides(q):
-            return q, ok
-        # The first pose found puts a link into another: each start in turn may find one that does not.
-        for start in (*(home + bend for bend in (0.5, -0.5)), *random_starts(self.arm, home, max(restarts, RESTARTS))):
-            q, ok = reach_top_down(self.model, self.data, self.arm, goal, start, home, APPROACH)
-            if ok and not self.collides(q):
-                return q, True
-        return seed, False
+        return reach_top_down(self.model, self.data, self.arm, point + self.root, seed, home, APPROACH, restarts)
 
     def turned(self, azimuth: float) -> np.ndarray:
         """Home with the first joint turned so that the tool heads towards `azimuth`."""
@@ -288,8 +263,17 @@ def arm_reach(asset: ArticulatedAsset) -> ArmReach:
     cached = _cached_reach(path, asset)
     if cached is not None:
         return cached
-    reach = compute_reach(asset)
     path.parent.mkdir(parents=True, exist_ok=True)
+    with building(path):  # compile workers asking at once: one builds (10-25 CPU s), the others read it
+        cached = _cached_reach(path, asset)
+        if cached is not None:
+            return cached
+        reach = compute_reach(asset)
+        _write_reach(path, asset, reach)
+    return reach
+
+
+def _write_reach(path: Path, asset: ArticulatedAsset, reach: ArmReach) -> None:
     atomic_write(path, json.dumps({
         "asset": os.path.basename(asset.source), "sha256": asset.digest,
         "frame": "the arm's object's axes about its root body: +y ahead (the file's +x), +z up",
@@ -297,4 +281,3 @@ def arm_reach(asset: ArticulatedAsset) -> ArmReach:
         **ring_json(reach.ring),
         "rays": [list(r) for r in reach.rays],
     }, indent=1) + "\n")
-    return reach
