@@ -51,6 +51,27 @@ SLOW = (
     "tests/sampling/test_scene_checks.py::test_baseline_samplers_satisfy_every_relation[bin_ten_parts_arm.prs]",
     "tests/sampling/test_scene_checks.py::test_exact_scenes_satisfy_every_relation[sequential-200-bin_ten_parts_arm.prs]",
     "tests/sampling/test_scene_checks.py::test_exact_scenes_satisfy_every_relation[joint-50-bin_ten_parts_arm.prs]",
+    # Arms of their own (the tests' MJCF arm, the KUKA, a tool of the spec's): each builds its reach
+    # ring with mink's IK first (10-25 CPU s a ring, 2026-11-27).
+    "tests/assets/test_user_arms.py::",
+    "tests/assets/test_user_arm_kuka.py::",
+    "tests/runner/test_handover_any_arm.py::",
+    "tests/sampling/test_scene_checks.py::test_baseline_samplers_satisfy_every_relation[kitchen_shelf.prs]",
+    # Kills, full devices, two writers and the wheel: each starts processes (5-12 s).
+    "tests/backends/test_output_folder.py::test_two_compiles_into_one_folder_never_corrupt_it",
+    "tests/backends/test_output_folder.py::test_kill_9_leaves_every_finished_file_recorded_and_no_writer_behind",
+    "tests/backends/test_output_folder.py::test_sigterm_records_the_finished_scenes_and_ctrl_c_prints_one_line",
+    "tests/cli/test_robustness.py::test_real_full_device_and_closed_pipe",
+    "tests/test_wheel.py::test_the_installed_wheel_compiles_a_spec_that_imports_the_model_library",
+    "tests/cli/test_progress.py::test_sample_shows_scenes_per_second_on_a_terminal_only",
+    "tests/cli/test_bench_backends.py::test_bench_episodes_reports_cpu_per_episode_and_where_it_goes",
+    # The baseline samplers on packed specs (5-9 s each; the exact samplers' checks stay).
+    "tests/sampling/test_scene_checks.py::test_baseline_samplers_satisfy_every_relation[ten_cubes_tray.prs]",
+    "tests/sampling/test_scene_checks.py::test_baseline_samplers_satisfy_every_relation[bin_ten_parts.prs]",
+    "tests/sampling/test_scene_checks.py::test_exact_scenes_satisfy_every_relation[sequential-200-bin_ten_parts.prs]",
+    "tests/sampling/test_engine.py::test_baseline_counts_rejections_by_cause_and_exact_rejects_nothing",
+    "tests/api/test_resets.py::test_the_domain_randomisation_example_runs_as_written",
+    "tests/assets/test_articulated_objects.py::test_every_format_carries_the_cabinet[cabinet.urdf]",
 )
 
 
