@@ -182,7 +182,7 @@ def test_a_robot_on_the_table_is_scored_as_in_mujoco(tmp_path):
     try:
         task = PybulletTask.load(root / "sdf" / "00000.sdf", client)
         in_pybullet = task.update(0.0)
-        assert sorted(task.links) == ["r1/leftfinger", "r1/rightfinger", "r2/leftfinger", "r2/rightfinger"]
+        assert sorted(task.links) == [f"{r}/panda_{side}finger" for r in ("r1", "r2") for side in ("left", "right")]
     finally:
         pybullet.disconnect(client)
     assert in_mujoco.robustness["fail:arm on table"] > 0.1  # the arms start clear of the table top
