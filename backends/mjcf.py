@@ -29,7 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from prsc.user_assets.asset_files import COLLISION_GROUP, is_position_servo  # COLLISION_GROUP: collision-only geoms, hidden when drawn
+from prsc.user_assets.joint_servos import is_position_servo
+from prsc.user_assets.asset_files import COLLISION_GROUP  # COLLISION_GROUP: collision-only geoms, hidden when drawn
 from prsc.assets.articulated import RobotModel
 from prsc.assets.simulation import set_simulation_options
 from prsc.backends.inertia import PRIMITIVES

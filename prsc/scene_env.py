@@ -47,7 +47,7 @@ def action_bounds(model) -> tuple[np.ndarray, np.ndarray]:
     position servo, else +-UNBOUNDED_ACTUATOR_BOUND (docs/learning.md, "Actions")."""
     import mujoco
 
-    from prsc.user_assets.asset_files import is_position_servo
+    from prsc.user_assets.joint_servos import is_position_servo
 
     low = np.full(model.nu, -UNBOUNDED_ACTUATOR_BOUND)
     high = np.full(model.nu, UNBOUNDED_ACTUATOR_BOUND)

@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from prsc.user_assets.arm_ik import ArmFrames
-from prsc.user_assets.asset_files import is_position_servo
+from prsc.user_assets.joint_servos import is_position_servo
 from prsc.assets.articulated import robot_model
 from prsc.backends.names import with_body_names
 from prsc.errors import PrscError

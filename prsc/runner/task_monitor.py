@@ -117,15 +117,12 @@ class MjWorld:
             self._place_batch(data)
         shift, halves = self._batch_boxes
         position = data.geom_xpos if positions is None else positions
-        gaps = np.abs(position[..., self._batch_a, :] - position[..., self._batch_b, :] + shift) - halves
-        np.maximum(gaps, 0.0, out=gaps)
-        return np.einsum("...d,...d->...", gaps, gaps)
+        return _squared_box_gaps(position[..., self._batch_a, :] - position[..., self._batch_b, :] + shift, halves)
 
     def lower_bounds(self, data: mujoco.MjData, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
         """Squared broad-phase bounds of geom pairs (ia[k], ib[k]) outside the batch."""
         centres, halves = self._boxes(data)
-        gaps = np.maximum(np.abs(centres[ia] - centres[ib]) - halves[ia] - halves[ib], 0.0)
-        return np.einsum("nd,nd->n", gaps, gaps)
+        return _squared_box_gaps(centres[ia] - centres[ib], halves[ia] + halves[ib])
 
     def pose(self, data: mujoco.MjData, name: str, moving: bool = True) -> Pose:
         """The object's box centre and rotation now (the body frame is the box's, prsc/backends), views into
@@ -198,6 +195,14 @@ class StateDistances:
                         best, world._nearest[pair] = d, (first, second)
         self.exact[pair] = best = float(best)
         return best
+
+
+def _squared_box_gaps(offsets: np.ndarray, halves: np.ndarray) -> np.ndarray:
+    """The squared distance between two world-aligned boxes `offsets` apart (centre to centre)
+    whose half sizes sum to `halves` (0 where they overlap), over the last axis."""
+    gaps = np.abs(offsets) - halves
+    np.maximum(gaps, 0.0, out=gaps)
+    return np.einsum("...d,...d->...", gaps, gaps)
 
 
 _STILL = np.zeros(3)

@@ -27,7 +27,7 @@ from typing import Sequence
 
 from prsc.user_assets.asset_cache import input_stats, inputs_digest
 from prsc.user_assets.asset_fitting import Fitting, library_arm
-from prsc.user_assets.joint_servos import is_position_servo, position_servo_joints  # noqa: F401 (read from here too)
+from prsc.user_assets.joint_servos import position_servo_joints
 from prsc.user_assets.asset_inertia import unbalanced
 from prsc.errors import PrscError
 from prsc.user_assets.mesh_paths import mujoco_readable_meshes
