@@ -52,7 +52,7 @@ SLOW = (
     "tests/sampling/test_scene_checks.py::test_exact_scenes_satisfy_every_relation[sequential-200-bin_ten_parts_arm.prs]",
     "tests/sampling/test_scene_checks.py::test_exact_scenes_satisfy_every_relation[joint-50-bin_ten_parts_arm.prs]",
     # Arms of their own (the tests' MJCF arm, the KUKA, a tool of the spec's): each builds its reach
-    # ring with mink's IK first (10-25 CPU s a ring, 2026-11-27).
+    # ring with mink's IK first (20-35 CPU s a ring with its hole checked, recipe v12, 2026-11-27).
     "tests/assets/test_user_arms.py::",
     "tests/assets/test_user_arm_kuka.py::",
     "tests/runner/test_handover_any_arm.py::",

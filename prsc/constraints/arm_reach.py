@@ -13,11 +13,13 @@ round, in the object's axes: the file's +x, the ROS forward, turned to the objec
 +y, by asset_spec) and at each height (HEIGHTS
 above the root's origin) the reachable radii are scanned every STEP and both ends bisected
 to 3 mm. Each bound is then shrunk by a margin: between two rays the reach is taken to be
-no less than at the nearer of them, less the margin.
+no less than at the nearer of them, less the margin. Last, the hole's edge is checked by the
+IK from home (VERIFY_*) and grown where it misses.
 """
 
 from __future__ import annotations
 
+import bisect
 import hashlib
 import json
 import math
@@ -32,9 +34,9 @@ import numpy as np
 from prsc.user_assets.arm_ik import REACH_APPROACH, RESTARTS, ArmFrames, reach_top_down, turned
 from prsc.user_assets.asset_files import ArticulatedAsset, asset_spec, build_root
 from prsc.files import atomic_write, building
-from prsc.constraints.reach_ring import ReachRing, ring_from_json, ring_from_rays, ring_json
+from prsc.constraints.reach_ring import ReachRing, contains, ring_from_json, ring_from_rays, ring_json
 
-RECIPE_VERSION = "11"  # 11: the one IK, mink's (prsc/user_assets/arm_ik.py), which refuses poses that put a link into another (ArmFrames.fits, the one self-collision test); the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK, the construction below and the model it reads (asset_spec)
+RECIPE_VERSION = "12"  # 12: the hole's edge checked by the IK from home and grown where it misses (VERIFY_*). 11: the one IK, mink's (prsc/user_assets/arm_ik.py), which refuses poses that put a link into another (ArmFrames.fits, the one self-collision test); the inner end sought with restarts too. 9: the model turned to face the object's +y (asset_files.FORWARD_YAW). The IK, the construction below and the model it reads (asset_spec)
 APPROACH = REACH_APPROACH  # m above the point the tool must also reach
 HEIGHTS = (0.0, 0.075, 0.15)  # m above the root origin: the levels the cell spans
 SECTORS = 36  # rays all the way round: every 10 degrees
@@ -51,6 +53,15 @@ EDGE_TOLERANCE = 0.01  # m an added ray's run may fall short of its reached neig
 MARGIN = 0.003
 INNER_MARGIN = 0.005
 INNER_CHECK = 0.005  # m steps outwards from an inner end a controller's IK does not find
+# Beside the base the IK from home is ragged: between two rays whose inner ends it reaches it
+# may miss points farther out (the Panda: 34 of 1,252 points within 2 cm of the hole's edge at
+# its root's height, 0.19-0.23 m from its base). So the built ring's hole edge is checked, in
+# VERIFY_ANGLES directions at every height and VERIFY_BAND outwards from it, by the IK as a
+# controller runs it, and where a kept point is missed a ray is added there whose inner end lies
+# beyond it; then checked again, up to VERIFY_ROUNDS times.
+VERIFY_ANGLES = 180  # every 2 degrees
+VERIFY_BAND = (0.0, 0.01, 0.02)  # m outwards from the hole's edge
+VERIFY_ROUNDS = 6
 
 
 @dataclass(frozen=True)
@@ -218,18 +229,76 @@ def _edges(ik: TopDownIK, angles: list[float], per_ray: list[list]) -> dict[floa
     return added
 
 
+def _ring(by_angle: dict[float, list]) -> ReachRing:
+    """The ring of the rays measured so far (ring_from_rays with this builder's margins)."""
+    angles = sorted(by_angle)
+    try:
+        return ring_from_rays(angles, list(HEIGHTS), [by_angle[angle] for angle in angles], MARGIN, INNER_MARGIN)
+    except ValueError as error:
+        raise ValueError(f"{error} (rays every {360 // SECTORS} degrees at heights {list(HEIGHTS)} m)") from None
+
+
+def _hole_edge(ring: ReachRing, angle: float, height: float) -> float:
+    """How far from the root, along the direction `angle` at `height`, the ring's hole ends."""
+    rate = ring.hole_a[:, :2] @ np.array([math.cos(angle), math.sin(angle)])
+    room = ring.hole_b - ring.hole_a[:, 2] * height
+    ahead = rate > 1e-12
+    return float(np.min(room[ahead] / rate[ahead]))
+
+
+def _hole_misses(ik: TopDownIK, ring: ReachRing, known: dict[tuple, bool]) -> dict[tuple[float, int], float]:
+    """Points the ring keeps within VERIFY_BAND of its hole's edge that the IK does not reach
+    from home: per (direction, height index), the farthest such radius. `known` holds the
+    answers of earlier rounds (a round moves the edge in a few directions only)."""
+    misses: dict[tuple[float, int], float] = {}
+    for angle in (-math.pi + 2 * math.pi * i / VERIFY_ANGLES for i in range(VERIFY_ANGLES)):
+        for k, height in enumerate(HEIGHTS):
+            edge = _hole_edge(ring, angle, height) + 1e-4  # just outside the hole
+            for radius in (edge + step for step in VERIFY_BAND):
+                point = _ray_point(angle, radius, height)
+                if not contains(ring, point)[0]:
+                    continue
+                key = (angle, k, round(radius, 9))
+                if key not in known:
+                    known[key] = ik.reaches_from_home(point)
+                if not known[key]:
+                    misses[(angle, k)] = radius
+    return misses
+
+
+def _grow_hole(by_angle: dict[float, list], misses: dict[tuple[float, int], float]) -> None:
+    """Rays added (or moved) where the hole's edge was missed: a ray between two measured ones
+    claims no more than the sector it splits (their larger inner and smaller outer radius), and
+    at the height of a miss its inner end lies INNER_CHECK beyond it."""
+    measured = sorted(by_angle)
+    for (angle, k), radius in sorted(misses.items()):
+        same = [known for known in by_angle if abs(known - angle) < 1e-9]
+        if same:
+            angle = same[0]
+        else:
+            j = bisect.bisect_right(measured, angle) - 1  # -1: the last ray, round the turn
+            pair = (by_angle[measured[j]], by_angle[measured[(j + 1) % len(measured)]])
+            by_angle[angle] = [None if a is None or b is None else (max(a[0], b[0]), min(a[1], b[1]))
+                               for a, b in zip(*pair)]
+        inner, outer = by_angle[angle][k]
+        by_angle[angle][k] = (max(inner, radius + INNER_CHECK), outer)
+
+
 def compute_reach(asset: ArticulatedAsset) -> ArmReach:
     """The arm's top-down reach as a ring of exact rows (some seconds of IK)."""
     ik = TopDownIK(asset)
     angles = ray_angles()
     per_ray = [_rays_at(ik, angle) for angle in angles]
     by_angle = dict(zip(angles, per_ray)) | _edges(ik, angles, per_ray)
+    ring = _ring(by_angle)
+    known: dict[tuple, bool] = {}
+    for _ in range(VERIFY_ROUNDS):
+        misses = _hole_misses(ik, ring, known)
+        if not misses:
+            break
+        _grow_hole(by_angle, misses)
+        ring = _ring(by_angle)
     angles = sorted(by_angle)
-    per_ray = [by_angle[angle] for angle in angles]
-    try:
-        ring = ring_from_rays(angles, list(HEIGHTS), per_ray, MARGIN, INNER_MARGIN)
-    except ValueError as error:
-        raise ValueError(f"{error} (rays every {360 // SECTORS} degrees at heights {list(HEIGHTS)} m)") from None
     table = tuple((height, angle, *(by_angle[angle][k] or (None, None)))
                   for k, height in enumerate(HEIGHTS) for angle in angles)
     return ArmReach(ring, table)  # type: ignore[arg-type]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +61,33 @@ def test_points_in_the_ring_are_reached_top_down_and_points_past_it_are_not(pand
     candidates = _points(a, b + np.where(outer, 0.3, 0.0), 400, seed=2)
     beyond = [p for p in candidates if math.hypot(p[0], p[1]) > longest + 0.05][:6]
     assert len(beyond) == 6 and not any(ik.reaches_from_home(p) for p in beyond)
+
+
+def _beside_the_hole(ring, band: float) -> np.ndarray:
+    """Kept points at the root's height within `band` of the hole, on a 1 cm grid (offset 5 mm:
+    not the builder's own polar check points)."""
+    xs = np.arange(-0.455, 0.46, 0.01)
+    grid = np.array([[x, y, 0.0] for x in xs for y in xs])
+    grid = grid[contains(ring, grid)]
+    inside = (grid[:, None, :] - band * np.array([[math.cos(t), math.sin(t), 0.0] for t in np.arange(0, 2 * math.pi, math.pi / 8)]))
+    hole = (np.einsum("ij,pkj->pki", ring.hole_a, inside) <= ring.hole_b).all(axis=2)
+    return grid[hole.any(axis=1)]
+
+
+def test_every_point_kept_beside_the_hole_is_reached_from_home(panda):
+    # Beside the base the IK from home is ragged: before the builder checked the hole's edge,
+    # 34 such points of the Panda's ring at its root's height were not reached.
+    _, ring, ik = panda
+    near = _beside_the_hole(ring, 0.02)
+    assert len(near) > 300
+    missed = [p.round(3).tolist() for p in near if not ik.reaches_from_home(p)]
+    assert not missed, f"{len(missed)} of {len(near)} kept points beside the hole are not reached: {missed}"
+    # The same check fails on a wrong cell: the hole shrunk to half keeps points the IK misses.
+    gap = {"gap_b": ring.hole_b / 2} if np.array_equal(ring.gap_b, ring.hole_b) else {}  # the reach goes all round
+    shrunk = replace(ring, hole_b=ring.hole_b / 2, **gap)
+    new = sorted(_beside_the_hole(shrunk, 0.02), key=lambda p: math.hypot(p[0], p[1]))
+    assert len(new) >= 10
+    assert sum(not ik.reaches_from_home(p) for p in new[:10]) >= 5
 
 
 def test_reachable_cubes_are_sampled_exactly_inside_the_ring_and_reached_by_the_one_ik(panda):
