@@ -22,7 +22,7 @@ from prsc.constraints.polytope_ir import EXCLUSION_KINDS, REQUIRE, ConstraintPro
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.build import reads_support
 from prsc.constraints.position import specifier_rules, workspace_rule
-from prsc.constraints.specifier_rows import link_target_error
+from prsc.user_assets.asset_links import link_target_error
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support

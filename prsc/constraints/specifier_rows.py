@@ -14,6 +14,7 @@ from prsc.constraints.polytope_ir import Support
 from prsc.constraints.regions import link_face
 from prsc.constraints.values import LinkValue, ObjectValue, OrientedPoint, RegionValue, as_position
 from prsc.errors import PrscError, Span
+from prsc.user_assets.asset_links import link_target_error
 from prsc.geometry.container import PROPERTIES as INTERIOR_PROPERTIES, Interior, asset_interior, declared_interior
 from prsc.ir.models import model_of
 from prsc.geometry.polytope import Polytope
@@ -127,21 +128,6 @@ def rows_on(target: Any, completely: bool, support: Support, label: int, span: S
     if point is not None:
         return _point_rows(point + _UP * float(support(_UP[None, :])[0]), label)
     raise PrscError("'on' needs an object, a planar region or a point", span)
-
-
-def link_target_error(label: str, has_support: bool, hollow: bool, inside: bool, completely: bool,
-                      span: Span | None, meshes: int = 0) -> None:
-    """The error for `on`/`in` a link that has no support surface or is not hollow (none if it fits);
-    `meshes`: how many of the link's collision geoms are meshes (each collides as its convex hull)."""
-    word = ("completely " if completely else "") + ("in" if inside else "on")
-    if inside and not hollow:
-        why = (f" ({meshes} of its collision geoms {'is a mesh' if meshes == 1 else 'are meshes'}: MuJoCo collides "
-               "a mesh as its convex hull, so a drawer or bin modelled as one mesh has no inside; give its floor "
-               "and walls as collision geoms of their own, boxes or convex meshes)") if meshes else ""
-        raise PrscError(f"`{word} {label}` needs a hollow link (a floor walled on four sides), and {label} is "
-                        f"none{why}: to rest on it write `{'completely on' if completely else 'on'} {label}`", span)
-    if not inside and not has_support:
-        raise PrscError(f"`{word} {label}`: the link has no upward face with free space above it", span)
 
 
 def interior_of(target: ObjectValue, span: Span | None, inside_asset: bool = False) -> Interior | None:

@@ -12,16 +12,19 @@ from typing import Sequence
 from prsc.user_assets.asset_files import (ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, model_asset, names_asset,
                                           resolve_asset_file)
 from prsc.user_assets.asset_fitting import library_arm
-from prsc.user_assets.asset_links import asset_link
+from prsc.geometry.link_surfaces import link_surfaces
+from prsc.user_assets.asset_links import AssetLink, asset_link, link_target_error
 from prsc.user_assets.asset_scale import scaled_asset_file
 from prsc.user_assets.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
-from prsc.errors import PrscError
+from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
 from prsc.ir.builtins import BUILTIN_SPAN, joint_name, joint_property
 from prsc.ir.checks import SIZES
 from prsc.ir.format import format_expr
 from prsc.ir.models import model_of
 from prsc.ir.program import ClassDef, ObjectDecl, Program
+from prsc.task.bind import link_object
+from prsc.task.terms import TaskObject, TaskStatements
 from prsc.ir.scope import did_you_mean
 from prsc.ir.walk import rebuild, walk
 from prsc.user_assets.mesh_paths import mesh_folders
@@ -192,14 +195,8 @@ def _linked(obj: ObjectDecl, assets: dict[str, ArticulatedAsset], folders: Seque
             return None
         target = node.target
         asset = assets.get(target.name) if isinstance(target, ir.ObjectRef) else None
-        if asset is None:
-            raise PrscError(f"{format_expr(target)} has no links: only an object whose model is a URDF or MJCF "
-                            "file has them", node.span)
-        try:
-            link = asset_link(asset, node.name, folders)
-        except PrscError as error:
-            raise PrscError(f"{format_expr(target)}.links: {error.message}", node.span) from None
-        return replace(node, link=link, root_offset=asset.root_offset)
+        link = _read_link(format_expr(target), asset, node.name, folders, node.span)
+        return replace(node, link=link, root_offset=asset.root_offset)  # type: ignore[union-attr]
 
     specifiers = []
     for spec in obj.specifiers:
@@ -208,6 +205,32 @@ def _linked(obj: ObjectDecl, assets: dict[str, ArticulatedAsset], folders: Seque
         changes = {name: rebuild(expr, resolve) for name, expr in linked.items()}
         specifiers.append(replace(spec, **changes) if changes else spec)
     return replace(obj, specifiers=tuple(specifiers))
+
+
+def _read_link(owner: str, asset: ArticulatedAsset | None, name: str, folders: Sequence[str], span: Span) -> AssetLink:
+    """Link `name` of the asset of object `owner` (an error at `span` when it has no file or no such link)."""
+    if asset is None:
+        raise PrscError(f"{owner} has no links: only an object whose model is a URDF or MJCF file has them", span)
+    try:
+        return asset_link(asset, name, folders)
+    except PrscError as error:
+        raise PrscError(f"{owner}.links: {error.message}", span) from None
+
+
+def _task_links(program: Program, assets: dict[str, ArticulatedAsset], folders: Sequence[str]) -> TaskStatements:
+    """The task with every link it names read from its object's file (docs/tasks.md): an `in` or
+    `on` a link that has no such surface is the sampler's error, at the task's line."""
+    links: dict[str, TaskObject] = {}
+    for ref in program.task_links:
+        link = _read_link(ref.obj, assets.get(ref.obj), ref.link, folders, ref.span)
+        if ref.relation is not None:
+            surfaces = link_surfaces(link.boxes)
+            link_target_error(f"{ref.obj}.links[{ref.link!r}]", surfaces.support is not None,
+                              surfaces.interior is not None, ref.relation.endswith("in"),
+                              ref.relation.startswith("completely"), ref.span, link.meshes)
+        linked = link_object(ref.obj, ref.link, link.boxes)
+        links.setdefault(linked.name, linked)
+    return replace(program.task, links=tuple(links.values()))
 
 
 def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Program:
@@ -228,4 +251,4 @@ def with_asset_models(program: Program, include_dirs: Sequence[str] = ()) -> Pro
         else:
             _no_file_joints(obj)
         objects.append(obj)
-    return replace(program, objects=tuple(objects))
+    return replace(program, objects=tuple(objects), task=_task_links(program, assets, folders))

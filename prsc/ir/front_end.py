@@ -84,10 +84,11 @@ class Compiler(LoopStatements):
         if not main.statements:
             raise PrscError("empty spec: the file has no statements", Span(main.path, 1, 1, 1, 1))
         self._execute(self.graph.main)
-        task = TaskLowering(self.scope, self.objects,
-                            lambda e: ExprResolver(self.scope, self.draws).resolve(e)).statements(self.task_nodes)
+        lowering = TaskLowering(self.scope, self.objects, lambda e: ExprResolver(self.scope, self.draws).resolve(e))
+        task = lowering.statements(self.task_nodes)
         return Program(
             task=task,
+            task_links=tuple(lowering.link_refs),
             path=main.path,
             objects=tuple(self.objects),
             variables=tuple(self.variables),

@@ -87,6 +87,17 @@ class Require:
 
 
 @dataclass(frozen=True)
+class TaskLinkRef:
+    """`X.links["NAME"]` in a task statement (docs/tasks.md): object X, link NAME, where it is written,
+    and the relation it is the target of ("in", "completely on"; None: `touches`, `distance from`)."""
+
+    obj: str
+    link: str
+    span: Span
+    relation: str | None = None
+
+
+@dataclass(frozen=True)
 class Program:
     """A whole spec after imports, name resolution and type checking."""
 
@@ -101,3 +112,5 @@ class Program:
     # (path, text) of every file read, so later stages quote source text as it was compiled.
     sources: tuple[tuple[str, str], ...] = field(default=(), repr=False, compare=False)
     task: TaskStatements = field(default_factory=TaskStatements)  # docs/tasks.md
+    # every `X.links["NAME"]` the task names, read from X's file by ir/asset_models.py into task.links
+    task_links: tuple[TaskLinkRef, ...] = field(default=())

@@ -9,7 +9,7 @@ from collections.abc import Callable, Sequence
 from prsc.errors import PrscError, Span
 from prsc.ir import model as ir
 from prsc.ir.checks import constant_number
-from prsc.ir.program import ObjectDecl
+from prsc.ir.program import ObjectDecl, TaskLinkRef
 from prsc.ir.scope import ClassInfo, LoopNames, ObjectInfo, Scope, VariableInfo, describe
 from prsc.syntax import nodes
 from prsc.task.terms import DEFAULT_HOLD, DIRECTIONS, Failure, Goal, Record, TaskStatements, Term
@@ -34,6 +34,7 @@ class TaskLowering:
         self.scope = scope
         self.objects = {o.name: o for o in objects}
         self.resolve = resolve
+        self.link_refs: list[TaskLinkRef] = []  # every `X.links["NAME"]` named, read from X's file later
 
     def statements(self, statements: Sequence[nodes.Statement]) -> TaskStatements:
         """The TaskStatements of the spec's task statement nodes (in source order)."""
@@ -120,6 +121,8 @@ class TaskLowering:
             return Term("distance", (self.number(expr.source), self.number(expr.target)))
         if isinstance(expr, nodes.Attribute):
             return self._attribute(expr)
+        if isinstance(expr, nodes.Index):
+            return self._link(expr, None)
         if isinstance(expr, nodes.Bool):
             return Term("true") if expr.value else Term("not", (Term("true"),))
         if isinstance(expr, nodes.Name):
@@ -169,9 +172,29 @@ class TaskLowering:
             return chosen
         return None
 
-    def _operand(self, expr: nodes.Expr, relation: nodes.Relation, camera: bool = False) -> list[str]:
-        objects = self._objects(expr)
+    def _link(self, expr: nodes.Index, relation: str | None) -> Term:
+        """`X.links["NAME"]`: link NAME of object X, where it is now (its file is read by ir/asset_models.py)."""
+        attr = expr.target
+        objects = self._objects(attr.target, allow_class=False) \
+            if isinstance(attr, nodes.Attribute) and attr.name == "links" else None
+        if objects is None:
+            raise PrscError('a task names a link as X.links["NAME"], X an object of the scene; this is no link', expr.span)
+        name = self.resolve(expr.index)
+        if not (isinstance(name, ir.Const) and name.type == ir.Type.STRING):
+            raise PrscError('a link is named by a string, as in cabinet.links["drawer"]', expr.index.span)
+        self.link_refs.append(TaskLinkRef(objects[0], str(name.value), expr.span, relation))
+        return Term("link", (Term("object", name=objects[0]),), name=str(name.value))
+
+    def _operand(self, expr: nodes.Expr, relation: nodes.Relation, camera: bool = False, target: bool = False) -> list[Term]:
         word = _WORDS.get(relation.kind, f"{relation.kind} of")
+        if isinstance(expr, nodes.Index):
+            # a link is a target where the sampler takes one (`in`, `on`, a direction's), and either side of `touches`
+            if (target and relation.kind not in ("visible", "holds")) or relation.kind == "touches":
+                return [self._link(expr, ("completely " if relation.completely else "") + relation.kind
+                                   if relation.kind in ("in", "on") else None)]
+            raise PrscError(f"a link is the target of `{word}`, not its subject: `{word}` reads an object of the scene",
+                            expr.span)
+        objects = self._objects(expr)
         if objects is None:
             raise PrscError(f"the simulated state decides `{word}` between objects of the scene; this is "
                             f"{describe(self.scope.names.get(expr.id)) if isinstance(expr, nodes.Name) else 'no object'}",
@@ -180,14 +203,14 @@ class TaskLowering:
             if _is_camera(self.objects[name]) != camera:
                 raise PrscError(f"`{word}` needs a camera here, and {name} is none" if camera else
                                 f"{name} is a camera: a sensor, not a body, so `{word}` cannot hold of it", expr.span)
-        return objects
+        return [Term("object", name=name) for name in objects]
 
     def _relation(self, expr: nodes.Relation) -> Term:
         kind = expr.kind
         subjects = self._operand(expr.subject, expr)
-        targets: list[str | None] = [None]
+        targets: list[Term | None] = [None]
         if expr.target is not None:
-            targets = self._operand(expr.target, expr, camera=kind == "visible")  # type: ignore[assignment]
+            targets = self._operand(expr.target, expr, camera=kind == "visible", target=True)  # type: ignore[assignment]
         by = () if expr.by is None else (self.number(expr.by),)
         if kind not in DIRECTIONS and by:  # pragma: no cover - the grammar puts `by` on directions only
             raise PrscError(f"`by` goes with a direction, not `{kind}`", expr.by.span)  # type: ignore[union-attr]
@@ -195,7 +218,7 @@ class TaskLowering:
         for subject in subjects:
             for target in targets:
                 if target == subject:
-                    raise PrscError(f"{subject} is related to itself", expr.span)
-                args = (Term("object", name=subject),) + (() if target is None else (Term("object", name=target),))
+                    raise PrscError(f"{subject.key} is related to itself", expr.span)
+                args = (subject,) + (() if target is None else (target,))
                 terms.append(Term(kind, args + by, completely=expr.completely))
         return terms[0] if len(terms) == 1 else Term("or", tuple(terms))

@@ -63,6 +63,16 @@ class MjWorld:
                 link = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{obj['body']}/{finger}")
                 if link >= 0:
                     self.geoms[f"{obj['name']}/{finger}"] = np.flatnonzero(collides & (model.geom_bodyid == link))
+        bodies_of = {obj["name"]: obj["body"] for obj in objects}
+        self._offsets: dict[str, np.ndarray] = {}  # a link's box centre in its body frame
+        for link in task.links():
+            # `X.links["NAME"]`: body X/NAME of the compiled model, its own collision geoms (not its children's)
+            body = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{bodies_of[link.link.of]}/{link.link.link}")
+            if body < 0:
+                raise ValueError(f"the model has no body for {link.link.of}.links[{link.link.link!r}]")
+            self.body[link.name] = body
+            self.geoms[link.name] = np.flatnonzero(collides & (model.geom_bodyid == body))
+            self._offsets[link.name] = np.asarray(link.link.offset, dtype=float)
         self._fixed_bodies = frozenset(b for b in self.body.values()
                                        if model.body_weldid[b] == 0 and model.body_mocapid[b] < 0)
         self._fixed_poses: dict[str, tuple[int, Pose]] = {}
@@ -128,6 +138,16 @@ class MjWorld:
         """The object's box centre and rotation now (the body frame is the box's, prsc/backends), views into
         `data` valid until it steps; its velocities when `moving` (else zeros: the task reads none)."""
         b = self.body[name]
+        offset = self._offsets.get(name)
+        if offset is not None:  # a link: its box centre, off its body's origin
+            found = self._fixed_poses.get(name)
+            if found is not None and found[0] == data._address:
+                return found[1]
+            rotation = data.xmat[b].reshape(3, 3).copy()
+            pose = Pose(data.xpos[b] + rotation @ offset, rotation, _STILL, _STILL)
+            if b in self._fixed_bodies:  # a link welded to the world (a cabinet's carcass): placed once
+                self._fixed_poses[name] = (data._address, pose)
+            return pose
         if b in self._fixed_bodies:  # welded to the world: placed once
             found = self._fixed_poses.get(name)
             if found is None or found[0] != data._address:

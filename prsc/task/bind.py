@@ -5,9 +5,12 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from prsc.geometry.container import Interior, asset_interior, declared_interior
+from prsc.geometry.link_surfaces import Box, Face, link_surfaces
 from prsc.task.task_regions import box_region
-from prsc.task.terms import Region, Task, TaskObject, TaskStatements
+from prsc.task.terms import LinkFrame, Region, Task, TaskObject, TaskStatements, link_key
 
 FINGERS = "fingers"
 """The property naming a robot's finger links in its own file (`holds`): a library arm's are
@@ -37,6 +40,29 @@ def task_object(obj: dict[str, Any]) -> TaskObject:
                       tuple(str(f) for f in obj.get("properties", {}).get(FINGERS, ())), bool(obj.get("static", False)))
 
 
+def link_object(obj: str, link: str, boxes: tuple[Box, ...]) -> TaskObject:
+    """Link `link` of object `obj` as the evaluator sees it (named `obj/link`): the box of its collision
+    geometry (`boxes`, in the link frame), its support surface and its interior, as the sampler reads
+    them (prsc/geometry/link_surfaces.py) and as they move with the link."""
+    low = np.min([b[0] for b in boxes], axis=0) if boxes else np.zeros(3)
+    high = np.max([b[1] for b in boxes], axis=0) if boxes else np.zeros(3)
+    centre, dims = (low + high) / 2, tuple(float(v) for v in high - low)
+    surfaces = link_surfaces(tuple(boxes))
+
+    def region(face: Face | None) -> Region | None:
+        if face is None:
+            return None
+        cx, cy, cz = centre.tolist()
+        return Region(((1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)),
+                      (face.x_high - cx, cx - face.x_low, face.y_high - cy, cy - face.y_low), face.z - cz, face.z - cz)
+
+    top = box_region(dims)  # type: ignore[arg-type]
+    support = region(surfaces.support) or Region(top.normals, top.offsets, top.high, top.high)
+    return TaskObject(link_key(obj, link), dims, support, surfaces.interior is not None,  # type: ignore[arg-type]
+                      static=False, link=LinkFrame(obj, link, tuple(float(v) for v in centre)),  # type: ignore[arg-type]
+                      interior=region(surfaces.interior))
+
+
 def bind_task(statements: TaskStatements, scene: dict[str, Any]) -> Task:
-    """The compiled task of one scene."""
-    return Task(statements, tuple(task_object(o) for o in scene["objects"]))
+    """The compiled task of one scene: its objects, then the links the statements name."""
+    return Task(statements, tuple(task_object(o) for o in scene["objects"]) + statements.links)

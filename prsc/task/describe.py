@@ -15,6 +15,8 @@ def format_term(term: Term) -> str:
         return f"{term.value:g}"
     if op == "object":
         return str(term.name)
+    if op == "link":
+        return f'{format_term(args[0])}.links["{term.name}"]'
     if op == "true":
         return "True"
     if op == "vector":

@@ -12,8 +12,9 @@ task file beside it (`sdf/00003.task.json`) or in it (`urdf/00003/task.json`); a
 otherwise gives `PybulletTask(task_json, {"cube": cube_id, ...})`. An object's pose is its root
 link's frame (pybullet reports a base's centre of mass; the link frame is recovered from the
 inertial offset), which in prsc's files is the object's box frame. Distances are pybullet's
-`getClosestPoints` (negative when penetrating), capped at DISTANCE_CAP; a name "robot/link" in
-`links` names one link (a robot's finger, for `holds`).
+`getClosestPoints` (negative when penetrating), capped at DISTANCE_CAP; a name "object/link" in
+`links` names one link (a robot's finger, for `holds`; a link the task names, `cab.links["drawer"]`,
+whose pose is its link frame's from `getLinkState`, moved to its box centre).
 """
 
 from __future__ import annotations
@@ -45,6 +46,11 @@ class PybulletTask:
             raise ValueError(f"the task reads {', '.join(missing)}, which `bodies` does not map to pybullet bodies")
         self.bodies = dict(bodies)
         self.links = dict(links or {})
+        unmapped = [o.name for o in self.task.links() if o.name not in self.links]
+        if unmapped:
+            raise ValueError(f"the task reads the links {', '.join(unmapped)}, which `links` does not map to "
+                             "(pybullet body, link index) pairs")
+        self._link_offsets = {o.name: o.link.offset for o in self.task.links()}  # type: ignore[union-attr]
         self.client = client
         self.monitor = EpisodeMonitor(self.task)
         self._moving: dict[str, list[tuple[int, int | None]]] = {}  # each name's parts (see _parts)
@@ -60,6 +66,12 @@ class PybulletTask:
             if o.name in bodies and o.fingers:
                 joints = _joint_indices(bodies[o.name], client, child_links=True)
                 links.update({f"{o.name}/{f}": (bodies[o.name], joints[f]) for f in o.fingers if f in joints})
+        for o in task.links():  # `X.links["NAME"]`: link NAME of X's body, by its name in the files
+            of, name = o.link.of, o.link.link  # type: ignore[union-attr]
+            joints = _joint_indices(bodies[of], client, child_links=True) if of in bodies else {}
+            if name not in joints:
+                raise ValueError(f"{scene}: {of} has no link {name!r} in pybullet (the task reads {of}.links[{name!r}])")
+            links[o.name] = (bodies[of], joints[name])
         return cls(task, bodies, client, links)
 
     def _pose(self, name: str) -> Pose:
@@ -75,6 +87,14 @@ class PybulletTask:
         (wx, wy, wz), (rx, ry, rz) = angular, position - np.asarray(com, dtype=float)
         linear = linear + (wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx)  # the frame's own velocity
         return Pose(position, rotation, linear, angular)
+
+    def _link_pose(self, name: str) -> Pose:
+        """A link's box centre and rotation: its link frame (getLinkState) moved by the box's offset in it."""
+        body, link = self.links[name]
+        state = self.p.getLinkState(body, link, computeForwardKinematics=True, physicsClientId=self.client)
+        rotation = np.asarray(self.p.getMatrixFromQuaternion(state[5]), dtype=float).reshape(3, 3)
+        position = np.asarray(state[4], dtype=float) + rotation @ np.asarray(self._link_offsets[name], dtype=float)
+        return Pose(position, rotation, np.zeros(3), np.zeros(3))
 
     def _parts(self, name: str) -> list[tuple[int, int | None]]:
         """(body, link or None for every link) pairs whose shapes stand for `name`: one link of a
@@ -112,7 +132,9 @@ class PybulletTask:
 
     def state(self, time: float) -> WorldState:
         """The world state now (poses of the task's objects; distances when asked)."""
-        return WorldState(float(time), {name: self._pose(name) for name in self.bodies}, self.distance)
+        poses = {name: self._pose(name) for name in self.bodies}
+        poses.update({name: self._link_pose(name) for name in self._link_offsets})
+        return WorldState(float(time), poses, self.distance)
 
     def update(self, time: float) -> TaskStatus:
         """Evaluate the task at simulated time `time` (once per control step)."""

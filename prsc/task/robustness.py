@@ -53,6 +53,7 @@ class Evaluator:
         self._radius = {name: _norm(half) for name, half in self._half.items()}  # centre to corner
         self._boxes = {o.name: box_region(o.dimensions) for o in task.objects}
         self._supports = {o.name: prepared_polygon(o.support) for o in task.objects}
+        self._interiors = {o.name: prepared_polygon(o.interior) for o in task.objects if o.interior is not None}
         self._compiled: dict[int, tuple[Term, Callable[[WorldState], object]]] = {}
 
     # ------------------------------------------------------------ values
@@ -81,8 +82,9 @@ class Evaluator:
             return lambda w: value
         if op == "true":
             return lambda w: Truth(True, math.inf)
-        if op == "object":
-            return lambda w: w.poses[name].position
+        if op in ("object", "link"):
+            key = term.key
+            return lambda w: w.poses[key].position
         if op == "attr":
             return self._compile_attribute(term, children[0])
         if op == "vector":
@@ -149,15 +151,15 @@ class Evaluator:
     def _relation(self, term: Term) -> Callable[[WorldState], float]:
         """A relation's robustness as a function of the world state, its objects bound once."""
         op = term.op
-        name = term.args[0].name
+        name = term.args[0].key
         if op == "touches":
-            other = term.args[1].name
+            other = term.args[1].key
             return lambda w: -w.distance(name, other)  # type: ignore[arg-type]
         obj = self.objects[name]  # type: ignore[index]
         if op in ("in", "on"):
-            return self._containment(op, term.completely, obj, self.objects[term.args[1].name])  # type: ignore[index]
+            return self._containment(op, term.completely, obj, self.objects[term.args[1].key])  # type: ignore[index]
         if op in DIRECTIONS:
-            other, axis, half = term.args[1].name, np.asarray(DIRECTIONS[op]), self._half[name]  # type: ignore[index]
+            other, axis, half = term.args[1].key, np.asarray(DIRECTIONS[op]), self._half[name]  # type: ignore[index]
             by = self.compiled(term.args[2]) if len(term.args) > 2 else (lambda w: 0.0)
 
             def direction(w):
@@ -184,7 +186,7 @@ class Evaluator:
 
     def _containment(self, op: str, completely: bool, obj: TaskObject, target: TaskObject) -> Callable[[WorldState], float]:
         name, target_name = obj.name, target.name
-        if op == "in" and not target.container:
+        if op == "in" and not rests_in(target):
             corners, box = self._corners[name], self._boxes[target_name]
 
             def inside(w):
@@ -192,7 +194,10 @@ class Evaluator:
                 points = (pose.position + corners @ pose.rotation.T) if completely else pose.position[None]
                 return float(prism_signed_distance(box, _local(target_pose, points)).min())
             return inside
-        high, (hx, hy, hz), footprint = target.support.high, self._half[name].tolist(), self._supports[target_name]
+        # `in` a link rests on its interior's floor, `on` it (and in or on a container) on its support surface
+        region, footprint = ((target.interior, self._interiors[target_name]) if op == "in" and target.interior is not None
+                             else (target.support, self._supports[target_name]))
+        high, (hx, hy, hz) = region.high, self._half[name].tolist()
         corners = self._corners[name]
 
         def resting(w):
@@ -224,8 +229,8 @@ class Evaluator:
             raise ValueError(f"{robot.name} has no gripper with two finger links")
         grip = [-world.distance(f"{robot.name}/{finger}", held) for finger in robot.fingers]
         first, second = sorted(grip, reverse=True)[:2]
-        apart = [world.distance(held, other) for other in self.objects
-                 if other not in (robot.name, held) and self.objects[other].camera is None]
+        apart = [world.distance(held, other.name) for other in self.task.bodies()
+                 if other.name not in (robot.name, held) and other.camera is None]
         return min([first, second] + apart)
 
     def _visible(self, obj: TaskObject, pose: Pose, camera: TaskObject, camera_pose: Pose) -> float:
@@ -265,15 +270,21 @@ def distance_pairs(task: Task) -> list[tuple[str, str]]:
     objects = {o.name: o for o in task.objects}
     out: list[tuple[str, str]] = []
     for term in every_term(task):
-        names = [a.name for a in term.args if a.op == "object"]
-        if term.op == "touches" or term.op == "on" or (term.op == "in" and objects[names[1]].container):
+        names = [a.key for a in term.args if a.op in ("object", "link")]
+        if term.op == "touches" or term.op == "on" or (term.op == "in" and rests_in(objects[names[1]])):  # type: ignore[index]
             out.append((names[0], names[1]))  # type: ignore[arg-type]
         elif term.op == "holds":
             robot, held = objects[names[0]], names[1]  # type: ignore[index]
             out.extend((f"{robot.name}/{finger}", held) for finger in robot.fingers)  # type: ignore[misc]
-            out.extend((held, other) for other in objects if other not in (robot.name, held)  # type: ignore[misc]
-                       and objects[other].camera is None)
+            out.extend((held, other.name) for other in task.bodies()  # type: ignore[misc]
+                       if other.name not in (robot.name, held) and other.camera is None)
     return out
+
+
+def rests_in(target: TaskObject) -> bool:
+    """Whether `in` the target means resting on a floor within walls (a container, a hollow link),
+    rather than the centre inside its box."""
+    return target.container or target.interior is not None
 
 
 def _as_number(value) -> float:

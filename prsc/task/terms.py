@@ -4,7 +4,7 @@ geometry needed to evaluate them from poses alone, and their JSON form (scene JS
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +28,8 @@ DIRECTIONS = {"left": (-1.0, 0.0, 0.0), "right": (1.0, 0.0, 0.0), "ahead": (0.0,
 class Term:
     """One node of a task expression.
 
-    op: const (value), vector (args x, y, z), object (name), attr (name: position x y z speed width
+    op: const (value), vector (args x, y, z), object (name), link (name: the link; args: its object,
+    `X.links["NAME"]`), attr (name: position x y z speed width
     length height; args: the target), arith (name: + - * /), neg, distance (2 args), compare (name:
     < <= > >= == !=), and, or, not, a relation (in on left right ahead behind above below touches
     holds at_rest upright visible; args subject[, target[, by]]; completely)."""
@@ -63,6 +64,14 @@ class Term:
         return cls(str(data["op"]), tuple(cls.from_json(a) for a in data.get("args", ())),
                    None if data.get("value") is None else float(data["value"]), data.get("name"),
                    bool(data.get("completely", False)))
+
+    @property
+    def key(self) -> str | None:
+        """The name an object or a link goes by in a world state's poses and distances: the object's
+        name, or `object/link` (as a robot's finger links are named)."""
+        if self.op == "link":
+            return link_key(str(self.args[0].name), str(self.name))
+        return self.name if self.op == "object" else None
 
     def objects(self) -> set[str]:
         """Names of the objects the term reads."""
@@ -100,14 +109,21 @@ class Record:
     line: int = 0
 
 
+def link_key(obj: str, link: str) -> str:
+    """The name link `link` of object `obj` goes by in poses and distances (`cab/drawer`)."""
+    return f"{obj}/{link}"
+
+
 @dataclass(frozen=True)
 class TaskStatements:
-    """The task statements of a spec, the same in every scene."""
+    """The task statements of a spec, the same in every scene (with the links they name, read from
+    their objects' files: a link's geometry does not change from scene to scene)."""
 
     goals: tuple[Goal, ...] = ()
     failures: tuple[Failure, ...] = ()
     time_limit: float | None = None
     records: tuple[Record, ...] = ()
+    links: tuple[TaskObject, ...] = ()
 
     def __bool__(self) -> bool:
         return bool(self.goals or self.failures or self.records or self.time_limit is not None)
@@ -131,6 +147,16 @@ class Region:
 
 
 @dataclass(frozen=True)
+class LinkFrame:
+    """Where a link's box sits: link (body) `link` of object `of`, its box centre `offset` in the
+    link's own frame (the frame MuJoCo's body and pybullet's link state give), its axes the link's."""
+
+    of: str
+    link: str
+    offset: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
 class TaskObject:
     """What the evaluator knows of one object besides its pose: its box, the surface `on` means (a
     container's floor inside its walls, else the box's top face; `in` a container means `on` it, as
@@ -143,11 +169,16 @@ class TaskObject:
     camera: tuple[float, float] | None = None  # (vertical field of view in degrees, width / height)
     fingers: tuple[str, ...] = ()  # names of the finger links in the robot's own file ("leftfinger")
     static: bool = False
+    # A link (`X.links["NAME"]`, named `X/NAME`): where its box is in the link frame, and its interior
+    # (`in`: the floor within its walls) beside its support surface (`on`), both in its box frame.
+    link: LinkFrame | None = None
+    interior: Region | None = None
 
 
 @dataclass(frozen=True)
 class Task:
-    """A compiled task: the statements and every object of the scene (`holds` asks about all of them)."""
+    """A compiled task: the statements and every object of the scene (`holds` asks about all of them),
+    then every link the statements name (`cab/drawer`)."""
 
     statements: TaskStatements
     objects: tuple[TaskObject, ...] = field(default=())
@@ -188,7 +219,16 @@ class Task:
             records=tuple(Record(str(r["name"]), str(r["when"]), Term.from_json(r["expr"]), int(r.get("line", 0)))
                           for r in data["records"]),
         )
-        return cls(statements, tuple(_object_of(o) for o in data["objects"]))
+        objects = tuple(_object_of(o) for o in data["objects"])
+        return cls(replace(statements, links=tuple(o for o in objects if o.link is not None)), objects)
+
+    def bodies(self) -> tuple[TaskObject, ...]:
+        """The scene's objects, without the links the statements name."""
+        return tuple(o for o in self.objects if o.link is None)
+
+    def links(self) -> tuple[TaskObject, ...]:
+        """The links the statements name (`cab/drawer`)."""
+        return tuple(o for o in self.objects if o.link is not None)
 
 
 def task_file(output: str | os.PathLike[str]) -> Path:
@@ -210,13 +250,20 @@ def _region_of(d: dict[str, Any]) -> Region:
 
 
 def _object_json(o: TaskObject) -> dict[str, Any]:
-    return {"name": o.name, "dimensions": list(o.dimensions), "container": o.container,
-            "support": _region_json(o.support), "camera": None if o.camera is None else list(o.camera),
-            "fingers": list(o.fingers), "static": o.static}
+    out = {"name": o.name, "dimensions": list(o.dimensions), "container": o.container,
+           "support": _region_json(o.support), "camera": None if o.camera is None else list(o.camera),
+           "fingers": list(o.fingers), "static": o.static}
+    if o.link is not None:
+        out["link"] = {"of": o.link.of, "name": o.link.link, "offset": list(o.link.offset)}
+        out["interior"] = None if o.interior is None else _region_json(o.interior)
+    return out
 
 
 def _object_of(d: dict[str, Any]) -> TaskObject:
     w, l, h = (float(v) for v in d["dimensions"])
     return TaskObject(str(d["name"]), (w, l, h), _region_of(d["support"]), bool(d.get("container", False)),
                       None if d.get("camera") is None else (float(d["camera"][0]), float(d["camera"][1])),
-                      tuple(str(f) for f in d.get("fingers", ())), bool(d.get("static", False)))
+                      tuple(str(f) for f in d.get("fingers", ())), bool(d.get("static", False)),
+                      None if d.get("link") is None else LinkFrame(str(d["link"]["of"]), str(d["link"]["name"]),
+                                                                   tuple(float(v) for v in d["link"]["offset"])),
+                      None if d.get("interior") is None else _region_of(d["interior"]))

@@ -16,7 +16,7 @@ from typing import Sequence
 import numpy as np
 
 from prsc.user_assets.asset_files import JOINT_KINDS, ArticulatedAsset, asset_spec
-from prsc.errors import PrscError
+from prsc.errors import PrscError, Span
 
 
 @dataclass(frozen=True)
@@ -90,3 +90,18 @@ def _asset_link(source: str, digest: str, folders: tuple[str, ...], name: str) -
         local = (centre + corners * half) @ turn.reshape(3, 3).T + model.geom_pos[g]
         boxes.append((tuple(float(v) for v in local.min(axis=0)), tuple(float(v) for v in local.max(axis=0))))
     return AssetLink(name, tuple(reversed(chain)), tuple(float(v) for v in model.body_pos[root]), tuple(boxes), meshes)
+
+
+def link_target_error(label: str, has_support: bool, hollow: bool, inside: bool, completely: bool,
+                      span: Span | None, meshes: int = 0) -> None:
+    """The error for `on`/`in` a link that has no support surface or is not hollow (none if it fits);
+    `meshes`: how many of the link's collision geoms are meshes (each collides as its convex hull)."""
+    word = ("completely " if completely else "") + ("in" if inside else "on")
+    if inside and not hollow:
+        why = (f" ({meshes} of its collision geoms {'is a mesh' if meshes == 1 else 'are meshes'}: MuJoCo collides "
+               "a mesh as its convex hull, so a drawer or bin modelled as one mesh has no inside; give its floor "
+               "and walls as collision geoms of their own, boxes or convex meshes)") if meshes else ""
+        raise PrscError(f"`{word} {label}` needs a hollow link (a floor walled on four sides), and {label} is "
+                        f"none{why}: to rest on it write `{'completely on' if completely else 'on'} {label}`", span)
+    if not inside and not has_support:
+        raise PrscError(f"`{word} {label}`: the link has no upward face with free space above it", span)
