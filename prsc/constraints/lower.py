@@ -22,7 +22,7 @@ from prsc.constraints.polytope_ir import EXCLUSION_KINDS, REQUIRE, ConstraintPro
 from prsc.constraints.orientation import orientation_rule
 from prsc.constraints.build import reads_support
 from prsc.constraints.position import specifier_rules, workspace_rule
-from prsc.user_assets.asset_links import link_target_error
+from prsc.user_assets.asset_links import check_link_target
 from prsc.constraints.requirements import RequirePlan, implied_rule, plan_requires, require_check, require_rule
 from prsc.constraints.state import LoweringState
 from prsc.constraints.support import Support
@@ -30,7 +30,6 @@ from prsc.constraints.values import DIMENSIONS, ObjectValue, RegionValue, dimens
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import GeometryError
 from prsc.geometry.iis import is_feasible
-from prsc.geometry.link_surfaces import link_surfaces
 from prsc.geometry.lp import solve_lp
 from prsc.geometry.polytope import Polytope
 from prsc.ir import model as ir
@@ -89,9 +88,7 @@ def _check_link_targets(obj: ObjectDecl) -> None:
     for spec in obj.specifiers:
         target = spec.region if isinstance(spec, ir.In) else getattr(spec, "target", None)
         if isinstance(target, ir.LinkRef) and target.link is not None and isinstance(spec, (ir.In, ir.On)):
-            surfaces = link_surfaces(target.link.boxes)
-            link_target_error(format_expr(target), surfaces.support is not None, surfaces.interior is not None,
-                              isinstance(spec, ir.In), spec.completely, spec.span, target.link.meshes)
+            check_link_target(format_expr(target), target.link, isinstance(spec, ir.In), spec.completely, spec.span)
 
 
 def _lower_object(low: LoweringState, obj: ObjectDecl, requires: RequirePlan) -> ObjectPlan:

@@ -12,8 +12,7 @@ from typing import Sequence
 from prsc.user_assets.asset_files import (ROOT_OFFSET, ArticulatedAsset, asset_at, describe_asset, model_asset, names_asset,
                                           resolve_asset_file)
 from prsc.user_assets.asset_fitting import library_arm
-from prsc.geometry.link_surfaces import link_surfaces
-from prsc.user_assets.asset_links import AssetLink, asset_link, link_target_error
+from prsc.user_assets.asset_links import AssetLink, asset_link, check_link_target
 from prsc.user_assets.asset_scale import scaled_asset_file
 from prsc.user_assets.cabinet_urdf import LIBRARY_NAME, cabinet_urdf
 from prsc.errors import PrscError, Span
@@ -224,10 +223,8 @@ def _task_links(program: Program, assets: dict[str, ArticulatedAsset], folders: 
     for ref in program.task_links:
         link = _read_link(ref.obj, assets.get(ref.obj), ref.link, folders, ref.span)
         if ref.relation is not None:
-            surfaces = link_surfaces(link.boxes)
-            link_target_error(f"{ref.obj}.links[{ref.link!r}]", surfaces.support is not None,
-                              surfaces.interior is not None, ref.relation.endswith("in"),
-                              ref.relation.startswith("completely"), ref.span, link.meshes)
+            check_link_target(f"{ref.obj}.links[{ref.link!r}]", link, ref.relation.endswith("in"),
+                              ref.relation.startswith("completely"), ref.span)
         linked = link_object(ref.obj, ref.link, link.boxes)
         links.setdefault(linked.name, linked)
     return replace(program.task, links=tuple(links.values()))

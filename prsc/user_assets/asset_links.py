@@ -105,3 +105,13 @@ def link_target_error(label: str, has_support: bool, hollow: bool, inside: bool,
                         f"none{why}: to rest on it write `{'completely on' if completely else 'on'} {label}`", span)
     if not inside and not has_support:
         raise PrscError(f"`{word} {label}`: the link has no upward face with free space above it", span)
+
+
+def check_link_target(label: str, link: AssetLink, inside: bool, completely: bool, span: Span | None) -> None:
+    """The error for `on`/`in` link `link` (written `label`) when its geometry has no such surface: the
+    same before any scene (its boxes are in its own frame, whatever its pose) for a placement and a task."""
+    from prsc.geometry.link_surfaces import link_surfaces
+
+    surfaces = link_surfaces(link.boxes)
+    link_target_error(label, surfaces.support is not None, surfaces.interior is not None, inside, completely, span,
+                      link.meshes)
