@@ -316,3 +316,18 @@ def test_prsc_check_reports_a_bad_link_with_a_caret_and_writes_nothing(spec_fold
     assert "^^^^" in err and "Traceback" not in err
     assert main(["compile", str(path), "-o", str(spec_folder / "out")]) == 2
     assert not (spec_folder / "out").exists()
+
+
+def test_the_docs_example_runs_as_written(tmp_path):
+    """docs/tasks.md's link example: the library cabinet's spec and the pull controller, through `prsc run`."""
+    import re
+
+    text = (Path(__file__).parents[2] / "docs" / "tasks.md").read_text()
+    section = text[text.index('## Links: `X.links["NAME"]`'):text.index("## Outcomes")]
+    (tmp_path / "drawer.prs").write_text(re.search(r"```prs\n(.*?)```", section, re.S).group(1))
+    (tmp_path / "pull.py").write_text(re.search(r"```python\n(.*?)```", section, re.S).group(1))
+    assert main(["run", str(tmp_path / "drawer.prs"), "-n", "1", "--controller", f"{tmp_path / 'pull.py'}:pull",
+                 "-o", str(tmp_path / "out")]) == 0
+    record = json.loads((tmp_path / "out" / "results.jsonl").read_text().splitlines()[0])
+    assert record["outcome"] == "pulled" and record["task"]["outcome"] == "success"
+    assert record["task"]["robustness"]["fail:on the carcass"] > 0 and 0.05 < record["task"]["records"]["gap"] < 0.3
