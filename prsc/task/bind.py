@@ -58,8 +58,9 @@ def link_object(obj: str, link: str, boxes: tuple[Box, ...]) -> TaskObject:
 
     top = box_region(dims)  # type: ignore[arg-type]
     support = region(surfaces.support) or Region(top.normals, top.offsets, top.high, top.high)
-    return TaskObject(link_key(obj, link), dims, support, surfaces.interior is not None,  # type: ignore[arg-type]
-                      static=False, link=LinkFrame(obj, link, tuple(float(v) for v in centre)),  # type: ignore[arg-type]
+    # not a container: `in` it rests on its interior, `on` it on its support surface (robustness.rests_in)
+    return TaskObject(link_key(obj, link), dims, support,  # type: ignore[arg-type]
+                      link=LinkFrame(obj, link, tuple(float(v) for v in centre)),  # type: ignore[arg-type]
                       interior=region(surfaces.interior))
 
 
