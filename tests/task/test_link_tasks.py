@@ -331,3 +331,41 @@ def test_the_docs_example_runs_as_written(tmp_path):
     record = json.loads((tmp_path / "out" / "results.jsonl").read_text().splitlines()[0])
     assert record["outcome"] == "pulled" and record["task"]["outcome"] == "success"
     assert record["task"]["robustness"]["fail:on the carcass"] > 0 and 0.05 < record["task"]["records"]["gap"] < 0.3
+
+
+ARM = """\
+from tabletop import *
+
+cab = DrawerCabinet on Vector3D(0, 0, 0), with drawers 3, with joint "drawer1_slide" (0.15, 0.25)
+c1 = Cube completely in cab.links["drawer1"], with color "red"
+r1 = Robot on Vector3D(0.7, 0, 0)
+
+fail "arm on the drawer" when r1 touches cab.links["drawer1"]
+fail "drawer on the arm" when cab.links["drawer1"] touches r1
+"""
+
+
+def test_an_arm_touching_a_link_reads_the_link_s_own_geoms_in_mujoco_and_pybullet(tmp_path):
+    """`r1 touches cab.links["drawer1"]` (either way round): minus the least distance between the arm's
+    moving geoms and drawer1's own, all pairs by mj_geomDistance; pybullet within 2 mm (its own shapes)."""
+    (tmp_path / "arm.prs").write_text(ARM)
+    assert main(["compile", str(tmp_path / "arm.prs"), "-n", "1", "--target", "json,mjcf,sdf", "-o", str(tmp_path / "out")]) == 0
+    root = tmp_path / "out" / "arm"
+    scene, model, data = _mujoco(root)
+    status = TaskMonitor(scene, model).update(model, data)
+    drawer = model.body("cab/drawer1").id
+    arm = [b for b in range(model.nbody) if model.body(b).name.startswith("r1/") and model.body_weldid[b] != 0]
+    collides = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
+    ours = np.flatnonzero(collides & (model.geom_bodyid == drawer))
+    theirs = np.flatnonzero(collides & np.isin(model.geom_bodyid, arm))
+    assert len(ours) >= 5 and len(theirs) > 5
+    least = min(mujoco.mj_geomDistance(model, data, int(a), int(b), 1.0, None) for a in theirs for b in ours)
+    assert status.robustness["fail:arm on the drawer"] == pytest.approx(least, abs=1e-9)
+    assert status.robustness["fail:drawer on the arm"] == pytest.approx(least, abs=1e-9)
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        bullet = PybulletTask.load(root / "sdf" / "00000.sdf", client).update(0.0)
+    finally:
+        pybullet.disconnect(client)
+    for key in ("fail:arm on the drawer", "fail:drawer on the arm"):
+        assert bullet.robustness[key] == pytest.approx(least, abs=2e-3)
