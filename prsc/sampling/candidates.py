@@ -20,6 +20,7 @@ joint law too (as far as the Gibbs sweeps have mixed: docs/sampling.md).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence, Union
 
 import numpy as np
@@ -55,6 +56,22 @@ Drawn = Union[SceneResult, PrscError, None]  # a scene, the error of its propert
 # one candidate in about 5,800 passes), the budget is waste and the spec is left to Gibbs sweeps.
 PILOT_SEED, PILOT_SCENES = 0x5EED_0F_C4_4D1DA7E5, 8
 REJECTED = "candidate"  # the rejection statistics' cause for candidates that failed a test
+
+
+@dataclass(frozen=True)
+class Pilot:
+    """What the pilot found: of `scenes` scenes, how many found a passing candidate among their first `size`,
+    and the candidates they drew (up to the first passing one)."""
+
+    scenes: int
+    passed: int
+    drawn: int
+    size: int
+
+    @property
+    def pays(self) -> bool:
+        """Whether at least half the scenes found a passing candidate (else most would spend the budget)."""
+        return 2 * self.passed >= self.scenes
 
 
 class CandidateSampler:
@@ -104,15 +121,19 @@ class CandidateSampler:
             size = min(2 * size, 2 * FIRST_ROUND[1])
         return results
 
-    def pays(self) -> bool:
-        """Whether candidate rounds pay on this spec: at least half of 8 scenes of a fixed pilot seed find a
-        passing candidate within BUDGET (a function of the spec alone, so every run decides the same)."""
-        for size in (16, BUDGET):  # most specs decide on the small pilot
-            keys = scene_keys(PILOT_SEED, np.arange(PILOT_SCENES, dtype=np.uint64))
+    def pilot(self, sizes: tuple[int, ...] = (16, BUDGET)) -> "Pilot":
+        """8 scenes of a fixed pilot seed, `sizes[0]` candidates each, then the next size unless half found one (a
+        function of the spec alone, so every run decides the same): how many found a passing candidate, and the
+        candidates they drew. `(BUDGET,)`: what every scene would draw, for a cost."""
+        keys = scene_keys(PILOT_SEED, np.arange(PILOT_SCENES, dtype=np.uint64))
+        for size in sizes:  # most specs decide on the small pilot
             _, ok = self.evaluate(candidate_keys(keys, 0, size), keys)
-            if 2 * int(ok.reshape(PILOT_SCENES, size).any(axis=1).sum()) >= PILOT_SCENES:
-                return True
-        return False
+            ok = ok.reshape(PILOT_SCENES, size)
+            passed = ok.any(axis=1)
+            if 2 * int(passed.sum()) >= PILOT_SCENES or size == BUDGET:
+                drawn = np.where(passed, ok.argmax(axis=1) + 1, size)  # a scene none passed drew them all
+                return Pilot(PILOT_SCENES, int(passed.sum()), int(drawn.sum()), size)
+        raise AssertionError("unreachable: the last pilot size is BUDGET")
 
     def _first_round(self) -> int:
         """About 1.5 times the candidates a scene has needed on average so far (cost only: see BUDGET)."""
@@ -305,4 +326,4 @@ def _collide(state: CandidateState, a: str, b: str, rows: np.ndarray, upright: b
                          state.reaches[a][rows] + state.reaches[b][rows], upright)
 
 
-__all__ = ["BUDGET", "CandidateSampler", "CHUNK"]
+__all__ = ["BUDGET", "CandidateSampler", "CHUNK", "Pilot"]
