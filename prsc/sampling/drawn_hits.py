@@ -49,6 +49,20 @@ class Partners:
         return Partners(self.positions[rows], self.reaches[rows], self.halves[rows], self.rotations[rows],
                         self.inner[rows], self.outer[rows])
 
+    def columns(self, columns: tuple[int, ...]) -> "Partners":
+        """These boxes of every scene (of a stack of every object's box: one object's partners)."""
+        pick = list(columns)
+        return Partners(self.positions[:, pick], self.reaches[:, pick], self.halves[:, pick], self.rotations[:, pick],
+                        self.inner[:, pick], self.outer[:, pick])
+
+    def refresh(self, k: int, position: np.ndarray, own: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> None:
+        """Box k of the stack moved to `position` (m, 3), and, for a drawn box, took these rotations, half extents
+        and reaches (`own`, one row per scene)."""
+        self.positions[:, k] = position
+        if own is not None:
+            self.rotations[:, k], self.halves[:, k], self.reaches[:, k] = own
+            self.inner[:, k], self.outer[:, k] = circles(own[1])
+
 
 def circles(halves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Radii of the circles an upright box of these half extents contains and is contained in, in the plane."""
@@ -64,20 +78,26 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
     if not positions.shape[1]:
         return hit
     gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(3)]  # (m, s, P) each
-    spans = [reaches[:, :, None, axis] + others.reaches[:, None, :, axis] for axis in range(3)]
     # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
-    high = np.abs(gaps[2])
-    close = live[:, :, None] & (high < spans[2] - CONTACT_TOL)
+    high, tall = np.abs(gaps[2]), reaches[:, :, None, 2] + others.reaches[:, None, :, 2]
+    close = live[:, :, None] & (high < tall - CONTACT_TOL)
     if upright:
         inner, outer = circles(halves)
         apart = np.sqrt(gaps[0] * gaps[0] + gaps[1] * gaps[1])
-        sure = (high < spans[2] - (CONTACT_TOL + MARGIN)) & (apart < inner[:, :, None] + others.inner[:, None, :] - (CONTACT_TOL + MARGIN))
+        sure = (high < tall - (CONTACT_TOL + MARGIN)) & (apart < inner[:, :, None] + others.inner[:, None, :] - (CONTACT_TOL + MARGIN))
         hit = np.any(sure & close, axis=2)
         close &= ~hit[:, :, None]
         close &= apart < outer[:, :, None] + others.outer[:, None, :] - (CONTACT_TOL - MARGIN)
-    for axis in range(2):
-        close &= np.abs(gaps[axis]) < spans[axis] - CONTACT_TOL
-    scene, proposal, partner = np.nonzero(close)
+        scene, proposal, partner = np.nonzero(close)
+        near = np.ones(len(scene), dtype=bool)  # the world axes' broad phase, on the few pairs left
+        for axis in range(2):
+            near &= np.abs(gaps[axis][scene, proposal, partner]) < \
+                reaches[scene, proposal, axis] + others.reaches[scene, partner, axis] - CONTACT_TOL
+        scene, proposal, partner = scene[near], proposal[near], partner[near]
+    else:
+        for axis in range(2):
+            close &= np.abs(gaps[axis]) < reaches[:, :, None, axis] + others.reaches[:, None, :, axis] - CONTACT_TOL
+        scene, proposal, partner = np.nonzero(close)
     if not len(scene):
         return hit
     overlaps = upright_overlaps if upright else pair_overlaps

@@ -141,15 +141,18 @@ class GroupGibbs:
         keys = scene_keys(seed, np.asarray(indices, dtype=np.uint64))
         boxes = self._start(seed, indices, keys)
         every = np.arange(len(keys))
+        stack = self._partner_boxes(boxes, tuple(range(len(self.objects))))  # every box, kept as each one moves
         for sweep in range(self.sweeps):
             for k, obj in enumerate(self.objects):
                 if not obj.movable:
                     continue
                 if obj.drawn is not None:
-                    drawn, found = self._propose(k, STARTS + sweep, keys, boxes, obj.partners)
+                    drawn, found = self._propose(k, STARTS + sweep, keys, boxes, obj.partners, stack.columns(obj.partners))
                     boxes.set(k, every[found], drawn, np.flatnonzero(found))  # where none is free it stays
+                    stack.refresh(k, boxes.positions[k], (boxes.rotations[k], boxes.halves[k], boxes.reaches[k]))
                 else:
                     boxes.positions[k] = self._redraw(k, STARTS + sweep, keys, boxes, obj.partners)
+                    stack.refresh(k, boxes.positions[k], None)
         return boxes
 
     def _boxes(self, m: int) -> _Boxes:
@@ -243,8 +246,8 @@ class GroupGibbs:
             out[i] = region.points(u[i:i + 1, total * width:total * width + region.dim + 1])[0]
         return out, dead
 
-    def _propose(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...]
-                 ) -> tuple[_Drawn, np.ndarray]:
+    def _propose(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...],
+                 partner_boxes: Partners | None = None) -> tuple[_Drawn, np.ndarray]:
         """Drawn box k proposed afresh (size, yaw, centre) as the rejection reference draws it, per scene the
         first proposal that meets no partner's box: (the kept proposals, one row per scene; which scenes found one)."""
         obj = self.objects[k]
@@ -256,7 +259,7 @@ class GroupGibbs:
         pending = np.arange(m)
         first = _PROPOSAL_BASE + (stage * len(self.objects) + k) * _DRAWN_SPAN
         last = first + DRAWN_PROPOSALS
-        partners_of_all = self._partner_boxes(boxes, partners)
+        partners_of_all = self._partner_boxes(boxes, partners) if partner_boxes is None else partner_boxes
         upright = obj.upright and all(self.objects[j].upright for j in partners)
         size = FIRST_BLOCK
         while first < last:  # the first free proposal by number: how they are batched changes the cost only
