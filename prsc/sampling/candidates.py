@@ -56,6 +56,7 @@ Drawn = Union[SceneResult, PrscError, None]  # a scene, the error of its propert
 # one candidate in about 5,800 passes), the budget is waste and the spec is left to Gibbs sweeps.
 PILOT_SEED, PILOT_SCENES = 0x5EED_0F_C4_4D1DA7E5, 8
 REJECTED = "candidate"  # the rejection statistics' cause for candidates that failed a test
+_EYE = np.eye(3)
 
 
 @dataclass(frozen=True)
@@ -199,7 +200,9 @@ def draw_box(item: CandidateObject, site: int, state: CandidateState) -> np.ndar
     """Each candidate's box of one object (the `site`th of its plan) drawn into `state`: size and yaw from
     their priors, the centre uniform on its region given the earlier objects; which regions were not empty."""
     n = len(state.keys)
-    state.dims[item.name] = np.concatenate([np.broadcast_to(s.fn(state), (n, 1)) for s in item.sizes], axis=1)
+    dims = state.dims[item.name] = np.empty((n, len(item.sizes)))
+    for j, size in enumerate(item.sizes):  # each (n, 1), or (1, 1) where it is the same for all
+        dims[:, j] = np.ravel(size.fn(state))
     state.rotations[item.name] = _rotations(item, state, n)
     position, valid = _draw(item.region, item.name, state, uniforms(state.keys, 4 * site, item.region.uniforms))
     state.positions[item.name] = position
@@ -248,7 +251,10 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
         return region.sampler.points(u) + state.positions[region.anchor], valid
     # A rectangle on the carrier's face or floor, in its frame (specifiers.rows_on's rows).
     pos, rot = state.positions[region.anchor], state.rotations[region.anchor]
-    s = support(np.swapaxes(rot, 1, 2), state.rotations[name], state.dims[name] * 0.5)  # along its x, y, up
+    if rot.strides[0] == 0 and np.array_equal(rot[0], _EYE):  # an unrotated carrier, the same for all: no products
+        s = (np.abs(state.rotations[name]) * (state.dims[name] * 0.5)[:, None, :]).sum(axis=2)  # support's, exactly
+    else:
+        s = support(np.swapaxes(rot, 1, 2), state.rotations[name], state.dims[name] * 0.5)  # along its x, y, up
     hx, hy = np.full(n, region.half_size[0]), np.full(n, region.half_size[1])
     if region.completely:
         hx, hy = hx - s[:, 0], hy - s[:, 1]
