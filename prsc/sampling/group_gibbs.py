@@ -56,7 +56,7 @@ from prsc.sampling.stats import RejectionStats
 PROPOSALS = (32, 480)  # uniform proposals per draw, in two blocks, before the exact free space
 DRAWN_PROPOSALS = 512  # a drawn object's proposals per update, in blocks that double from FIRST_BLOCK (a few scenes need many)
 FIRST_BLOCK = 8
-BLOCK_ROWS = 256  # proposals a block holds at least, over its scenes
+BLOCK_ROWS = (16, 256)  # proposals a block holds at least, over its scenes: per scene of the chunk, and at most
 _DRAWN_SPAN = 512  # candidate numbers each update's proposals own (DRAWN_PROPOSALS <= it)
 STARTS = 64  # starts per scene before a dead end is an error (37 % of ten cubes' starts meet one)
 CHUNK = 64  # scenes drawn together (of fixed boxes)
@@ -262,9 +262,10 @@ class GroupGibbs:
         partners_of_all = self._partner_boxes(boxes, partners) if partner_boxes is None else partner_boxes
         upright = obj.upright and all(self.objects[j].upright for j in partners)
         size = FIRST_BLOCK
+        least = min(BLOCK_ROWS[0] * m, BLOCK_ROWS[1])
         while first < last:  # the first free proposal by number: how they are batched changes the cost only
-            # Blocks double, and hold at least BLOCK_ROWS proposals: where few scenes are left, numpy calls cost most.
-            size = min(max(size, -(-BLOCK_ROWS // len(pending))), last - first)
+            # Blocks double, and hold at least `least` proposals: where few scenes are left, numpy calls cost most.
+            size = min(max(size, -(-least // len(pending))), last - first)
             state = CandidateState(candidate_keys(keys[pending], first, size))
             n = len(state.keys)
             self.rows += n
