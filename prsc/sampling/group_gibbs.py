@@ -19,8 +19,9 @@ when boxes are drawn afresh) at once, for specs without requires whose objects a
   mixed into the exact kernel with a weight that depends on the others alone, so the
   joint law is still invariant (only the mixing slows);
 - an anchor (the tray) is not redrawn: its dependants' regions only translate with it and
-  meet no box outside its group, so the joint law of the group does not depend on where
-  the anchor is, and the anchor's law is its start's (uniform on its region);
+  meet no box outside its group (or only inside the anchor's box, whose own tests decide:
+  group_members._contained), so the joint law of the group does not depend on where the
+  anchor is, and the anchor's law is its start's (uniform on its region minus fixed boxes);
 - the start places objects in order, each from its region minus the earlier boxes; a dead
   end restarts the scene's start from the next stream (at most `STARTS` times).
 Every draw reads the counter stream at (seed, scene, stage, object) (a drawn object's
