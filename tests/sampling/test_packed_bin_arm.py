@@ -30,12 +30,16 @@ P_MIN = 0.01
 TESTED = [j for j, label in enumerate(LABELS) if label.split(".")[0] in ("washer_0", "washer_4", "bolt_0", "bolt_4")]
 
 
-def test_the_bin_beside_the_arm_takes_gibbs_rounds_and_explain_says_why(capsys):
+def test_the_bin_beside_the_arm_takes_gibbs_rounds_and_says_why():
     plan = compile_sampler(ARM).plan
     assert plan.path == "Gibbs rounds", plan.why
-    assert main(["explain", str(ARM)]) == 0
-    out = capsys.readouterr().out
-    assert "path: Gibbs rounds" in out and "lie in bin_1's box, whose tests against robot decide for them" in out
+    assert "lie in bin_1's box, whose tests against robot decide for them" in plan.describe()
+
+
+def test_explain_prints_why_the_bin_beside_the_arm_takes_gibbs_rounds(capsys):
+    assert main(["explain", str(ARM)]) == 0  # its third line is the plan's path and why (Sampler.plan.describe)
+    path = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("path: "))
+    assert path.startswith("path: Gibbs rounds (") and "lie in bin_1's box, whose tests against robot decide for them" in path
 
 
 def test_a_spec_whose_candidates_pass_keeps_candidate_rounds_and_explain_gives_the_costs(capsys):
