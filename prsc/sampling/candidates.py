@@ -20,6 +20,7 @@ joint law too (as far as the Gibbs sweeps have mixed: docs/sampling.md).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence, Union
 
 import numpy as np
@@ -55,6 +56,23 @@ Drawn = Union[SceneResult, PrscError, None]  # a scene, the error of its propert
 # one candidate in about 5,800 passes), the budget is waste and the spec is left to Gibbs sweeps.
 PILOT_SEED, PILOT_SCENES = 0x5EED_0F_C4_4D1DA7E5, 8
 REJECTED = "candidate"  # the rejection statistics' cause for candidates that failed a test
+_EYE = np.eye(3)
+
+
+@dataclass(frozen=True)
+class Pilot:
+    """What the pilot found: of `scenes` scenes, how many found a passing candidate among their first `size`,
+    and the candidates they drew (up to the first passing one)."""
+
+    scenes: int
+    passed: int
+    drawn: int
+    size: int
+
+    @property
+    def pays(self) -> bool:
+        """Whether at least half the scenes found a passing candidate (else most would spend the budget)."""
+        return 2 * self.passed >= self.scenes
 
 
 class CandidateSampler:
@@ -104,15 +122,19 @@ class CandidateSampler:
             size = min(2 * size, 2 * FIRST_ROUND[1])
         return results
 
-    def pays(self) -> bool:
-        """Whether candidate rounds pay on this spec: at least half of 8 scenes of a fixed pilot seed find a
-        passing candidate within BUDGET (a function of the spec alone, so every run decides the same)."""
-        for size in (16, BUDGET):  # most specs decide on the small pilot
-            keys = scene_keys(PILOT_SEED, np.arange(PILOT_SCENES, dtype=np.uint64))
+    def pilot(self, sizes: tuple[int, ...] = (16, BUDGET)) -> "Pilot":
+        """8 scenes of a fixed pilot seed, `sizes[0]` candidates each, then the next size unless half found one (a
+        function of the spec alone, so every run decides the same): how many found a passing candidate, and the
+        candidates they drew. `(BUDGET,)`: what every scene would draw, for a cost."""
+        keys = scene_keys(PILOT_SEED, np.arange(PILOT_SCENES, dtype=np.uint64))
+        for size in sizes:  # most specs decide on the small pilot
             _, ok = self.evaluate(candidate_keys(keys, 0, size), keys)
-            if 2 * int(ok.reshape(PILOT_SCENES, size).any(axis=1).sum()) >= PILOT_SCENES:
-                return True
-        return False
+            ok = ok.reshape(PILOT_SCENES, size)
+            passed = ok.any(axis=1)
+            if 2 * int(passed.sum()) >= PILOT_SCENES or size == BUDGET:
+                drawn = np.where(passed, ok.argmax(axis=1) + 1, size)  # a scene none passed drew them all
+                return Pilot(PILOT_SCENES, int(passed.sum()), int(drawn.sum()), size)
+        raise AssertionError("unreachable: the last pilot size is BUDGET")
 
     def _first_round(self) -> int:
         """About 1.5 times the candidates a scene has needed on average so far (cost only: see BUDGET)."""
@@ -178,7 +200,9 @@ def draw_box(item: CandidateObject, site: int, state: CandidateState) -> np.ndar
     """Each candidate's box of one object (the `site`th of its plan) drawn into `state`: size and yaw from
     their priors, the centre uniform on its region given the earlier objects; which regions were not empty."""
     n = len(state.keys)
-    state.dims[item.name] = np.concatenate([np.broadcast_to(s.fn(state), (n, 1)) for s in item.sizes], axis=1)
+    dims = state.dims[item.name] = np.empty((n, len(item.sizes)))
+    for j, size in enumerate(item.sizes):  # each (n, 1), or (1, 1) where it is the same for all
+        dims[:, j] = np.ravel(size.fn(state))
     state.rotations[item.name] = _rotations(item, state, n)
     position, valid = _draw(item.region, item.name, state, uniforms(state.keys, 4 * site, item.region.uniforms))
     state.positions[item.name] = position
@@ -227,7 +251,10 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
         return region.sampler.points(u) + state.positions[region.anchor], valid
     # A rectangle on the carrier's face or floor, in its frame (specifiers.rows_on's rows).
     pos, rot = state.positions[region.anchor], state.rotations[region.anchor]
-    s = support(np.swapaxes(rot, 1, 2), state.rotations[name], state.dims[name] * 0.5)  # along its x, y, up
+    if rot.strides[0] == 0 and np.array_equal(rot[0], _EYE):  # an unrotated carrier, the same for all: no products
+        s = (np.abs(state.rotations[name]) * (state.dims[name] * 0.5)[:, None, :]).sum(axis=2)  # support's, exactly
+    else:
+        s = support(np.swapaxes(rot, 1, 2), state.rotations[name], state.dims[name] * 0.5)  # along its x, y, up
     hx, hy = np.full(n, region.half_size[0]), np.full(n, region.half_size[1])
     if region.completely:
         hx, hy = hx - s[:, 0], hy - s[:, 1]
@@ -305,4 +332,4 @@ def _collide(state: CandidateState, a: str, b: str, rows: np.ndarray, upright: b
                          state.reaches[a][rows] + state.reaches[b][rows], upright)
 
 
-__all__ = ["BUDGET", "CandidateSampler", "CHUNK"]
+__all__ = ["BUDGET", "CandidateSampler", "CHUNK", "Pilot"]

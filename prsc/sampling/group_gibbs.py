@@ -19,8 +19,9 @@ when boxes are drawn afresh) at once, for specs without requires whose objects a
   mixed into the exact kernel with a weight that depends on the others alone, so the
   joint law is still invariant (only the mixing slows);
 - an anchor (the tray) is not redrawn: its dependants' regions only translate with it and
-  meet no box outside its group, so the joint law of the group does not depend on where
-  the anchor is, and the anchor's law is its start's (uniform on its region);
+  meet no box outside its group (or only inside the anchor's box, whose own tests decide:
+  group_members._contained), so the joint law of the group does not depend on where the
+  anchor is, and the anchor's law is its start's (uniform on its region minus fixed boxes);
 - the start places objects in order, each from its region minus the earlier boxes; a dead
   end restarts the scene's start from the next stream (at most `STARTS` times).
 Every draw reads the counter stream at (seed, scene, stage, object) (a drawn object's
@@ -40,12 +41,13 @@ from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.constraints.values import DIMENSIONS, ObjectValue
 from prsc.errors import PrscError
 from prsc.geometry.exceptions import EmptyRegionError
-from prsc.geometry.obb import CONTACT_TOL, pair_overlaps, upright_overlaps
+from prsc.geometry.obb import CONTACT_TOL
 from prsc.geometry.uniform_sampling import UniformSampler
 from prsc.sampling.candidate_values import CandidateState
 from prsc.sampling.candidates import draw_box
 from prsc.sampling.collisions import PlacedBox, collide_pairs, obstacles_for
 from prsc.sampling.counter_stream import candidate_keys, scene_keys, uniforms
+from prsc.sampling.drawn_hits import Partners, drawn_hits
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.group_members import SWEEPS, GroupObject
 from prsc.sampling.runtime import ObjectRuntime, evaluate_params
@@ -53,7 +55,10 @@ from prsc.sampling.seeds import scene_rng
 from prsc.sampling.stats import RejectionStats
 
 PROPOSALS = (32, 480)  # uniform proposals per draw, in two blocks, before the exact free space
-DRAWN_PROPOSALS = (8, 8, 16, 32, 64, 128, 256)  # a drawn object's proposals per update, in blocks that double (a few scenes need many)
+DRAWN_PROPOSALS = 512  # a drawn object's proposals per update, in blocks that double from FIRST_BLOCK (a few scenes need many)
+FIRST_BLOCK = 8
+BLOCK_ROWS = (16, 256)  # proposals a block holds at least, over its scenes: per scene of the chunk, and at most
+_DRAWN_SPAN = 512  # candidate numbers each update's proposals own (DRAWN_PROPOSALS <= it)
 STARTS = 64  # starts per scene before a dead end is an error (37 % of ten cubes' starts meet one)
 CHUNK = 64  # scenes drawn together (of fixed boxes)
 DRAWN_CHUNK = 256  # scenes drawn together when some boxes are drawn afresh: numpy calls per update, not their size, cost most
@@ -114,6 +119,7 @@ class GroupGibbs:
         self._index = {obj.name: k for k, obj in enumerate(objects)}
         # Scenes drawn together: how many changes the cost, never a scene (each reads its own stream).
         self.chunk = DRAWN_CHUNK if any(o.drawn is not None for o in objects) else CHUNK
+        self.rows = 0  # proposals drawn so far (pilot_rows)
 
     def draw(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
         """Scenes `indices` of `seed`."""
@@ -123,19 +129,32 @@ class GroupGibbs:
         return out
 
     def _chunk(self, seed: int, indices: list[int]) -> list[SceneResult]:
+        return self._results(self._sweep(seed, indices), seed, indices)
+
+    def pilot_rows(self, seed: int, indices: Sequence[int]) -> int:
+        """Proposals scenes `indices` of `seed` draw, start and sweeps (sampler_plan's cost of Gibbs rounds)."""
+        self.rows = 0
+        self._sweep(seed, [int(i) for i in indices])
+        return self.rows
+
+    def _sweep(self, seed: int, indices: list[int]) -> _Boxes:
+        """The chunk's boxes after its start and sweeps."""
         keys = scene_keys(seed, np.asarray(indices, dtype=np.uint64))
         boxes = self._start(seed, indices, keys)
         every = np.arange(len(keys))
+        stack = self._partner_boxes(boxes, tuple(range(len(self.objects))))  # every box, kept as each one moves
         for sweep in range(self.sweeps):
             for k, obj in enumerate(self.objects):
                 if not obj.movable:
                     continue
                 if obj.drawn is not None:
-                    drawn, found = self._propose(k, STARTS + sweep, keys, boxes, obj.partners)
+                    drawn, found = self._propose(k, STARTS + sweep, keys, boxes, obj.partners, stack.columns(obj.partners))
                     boxes.set(k, every[found], drawn, np.flatnonzero(found))  # where none is free it stays
+                    stack.refresh(k, boxes.positions[k], (boxes.rotations[k], boxes.halves[k], boxes.reaches[k]))
                 else:
                     boxes.positions[k] = self._redraw(k, STARTS + sweep, keys, boxes, obj.partners)
-        return self._results(boxes, seed, indices)
+                    stack.refresh(k, boxes.positions[k], None)
+        return boxes
 
     def _boxes(self, m: int) -> _Boxes:
         """A chunk's boxes before the start: fixed boxes as they are, drawn ones empty."""
@@ -209,6 +228,7 @@ class GroupGibbs:
         first = 0
         for size in PROPOSALS:  # the first free proposal by number: how they are batched changes the cost only
             block = u[pending, first * width:(first + size) * width].reshape(len(pending) * size, width)
+            self.rows += len(block)
             proposals = sampler.points(block).reshape(len(pending), size, 3) + shift[pending][:, None, :]
             free = ~self._hits(k, proposals, None, boxes.rows(pending), partners)
             found = free.any(axis=1)
@@ -227,8 +247,8 @@ class GroupGibbs:
             out[i] = region.points(u[i:i + 1, total * width:total * width + region.dim + 1])[0]
         return out, dead
 
-    def _propose(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...]
-                 ) -> tuple[_Drawn, np.ndarray]:
+    def _propose(self, k: int, stage: int, keys: np.ndarray, boxes: _Boxes, partners: tuple[int, ...],
+                 partner_boxes: Partners | None = None) -> tuple[_Drawn, np.ndarray]:
         """Drawn box k proposed afresh (size, yaw, centre) as the rejection reference draws it, per scene the
         first proposal that meets no partner's box: (the kept proposals, one row per scene; which scenes found one)."""
         obj = self.objects[k]
@@ -238,12 +258,18 @@ class GroupGibbs:
         kept = _Drawn(np.zeros((m, 3)), np.zeros((m, 3, 3)), np.zeros((m, 3)), np.zeros((m, 3)), {})
         found = np.zeros(m, dtype=bool)
         pending = np.arange(m)
-        first = _PROPOSAL_BASE + (stage * len(self.objects) + k) * sum(DRAWN_PROPOSALS)
-        partners_of_all = self._partner_boxes(boxes, partners)
+        first = _PROPOSAL_BASE + (stage * len(self.objects) + k) * _DRAWN_SPAN
+        last = first + DRAWN_PROPOSALS
+        partners_of_all = self._partner_boxes(boxes, partners) if partner_boxes is None else partner_boxes
         upright = obj.upright and all(self.objects[j].upright for j in partners)
-        for size in DRAWN_PROPOSALS:  # the first free proposal by number: how they are batched changes the cost only
+        size = FIRST_BLOCK
+        least = min(BLOCK_ROWS[0] * m, BLOCK_ROWS[1])
+        while first < last:  # the first free proposal by number: how they are batched changes the cost only
+            # Blocks double, and hold at least `least` proposals: where few scenes are left, numpy calls cost most.
+            size = min(max(size, -(-least // len(pending))), last - first)
             state = CandidateState(candidate_keys(keys[pending], first, size))
             n = len(state.keys)
+            self.rows += n
             anchor = item.region.anchor
             if anchor is not None:  # the anchor is a fixed box: its rotation and size are the same in every scene
                 a = self._index[anchor]
@@ -255,9 +281,9 @@ class GroupGibbs:
             reaches = np.einsum("nij,nj->ni", np.abs(rotations), halves)
             shape = (len(pending), size)
             centres = state.positions[item.name]
-            others = partners_of_all if len(pending) == m else tuple(a[pending] for a in partners_of_all)
-            free = valid.reshape(shape) & ~self._drawn_hits(
-                k, centres.reshape(shape + (3,)), rotations.reshape(shape + (3, 3)), halves.reshape(shape + (3,)),
+            others = partners_of_all if len(pending) == m else partners_of_all.rows(pending)
+            free = valid.reshape(shape) & ~drawn_hits(
+                centres.reshape(shape + (3,)), rotations.reshape(shape + (3, 3)), halves.reshape(shape + (3,)),
                 reaches.reshape(shape + (3,)), valid.reshape(shape), others, upright)
             hit = free.any(axis=1)
             rows = np.flatnonzero(hit) * size + free.argmax(axis=1)[hit]
@@ -269,45 +295,23 @@ class GroupGibbs:
             found[scenes] = True
             pending = pending[~hit]
             first += size
+            size *= 2
             if not len(pending):
                 break
         return kept, found
 
-    def _partner_boxes(self, boxes: _Boxes, partners: tuple[int, ...]) -> tuple[np.ndarray, ...]:
-        """The partners' boxes of every scene, stacked: centres, reaches, half extents (m, P, 3), rotations (m, P, 3, 3)."""
+    def _partner_boxes(self, boxes: _Boxes, partners: tuple[int, ...]) -> Partners:
+        """The partners' boxes of every scene, stacked (drawn_hits.Partners)."""
         m = len(boxes.positions[0])
         if not partners:
-            return np.zeros((m, 0, 3)), np.zeros((m, 0, 3)), np.zeros((m, 0, 3)), np.zeros((m, 0, 3, 3))
+            return Partners.of(np.zeros((m, 0, 3)), np.zeros((m, 0, 3)), np.zeros((m, 0, 3)), np.zeros((m, 0, 3, 3)))
 
         def stack(arrays: list[np.ndarray], shape: tuple[int, ...]) -> np.ndarray:
             return np.stack([a if boxes.per_scene[j] else np.broadcast_to(a, (m,) + shape) for j, a in zip(partners, arrays)],
                             axis=1)
 
-        return (np.stack([boxes.positions[j] for j in partners], axis=1), stack([boxes.reaches[j] for j in partners], (3,)),
-                stack([boxes.halves[j] for j in partners], (3,)), stack([boxes.rotations[j] for j in partners], (3, 3)))
-
-    def _drawn_hits(self, k: int, centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, reaches: np.ndarray,
-                    live: np.ndarray, others: tuple[np.ndarray, ...], upright: bool) -> np.ndarray:
-        """Which of drawn box k's live proposals (m, s, ...: s per scene) collide with a partner's box in their
-        scene (`others`: `_partner_boxes` of those scenes): one broad phase over every (proposal, partner) pair,
-        one SAT call for the close pairs."""
-        hit = np.zeros(live.shape, dtype=bool)
-        positions, other_reach, other_half, other_rotation = others
-        if not positions.shape[1]:
-            return hit
-        # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
-        close = np.repeat(live[:, :, None], positions.shape[1], axis=2)  # (m, s, P)
-        for axis in range(3):
-            gap = np.abs(centres[:, :, None, axis] - positions[:, None, :, axis])
-            close &= gap < reaches[:, :, None, axis] + other_reach[:, None, :, axis] - CONTACT_TOL
-        scene, proposal, partner = np.nonzero(close)
-        if not len(scene):
-            return hit
-        overlaps = upright_overlaps if upright else pair_overlaps
-        pairs = overlaps(centres[scene, proposal], rotations[scene, proposal], halves[scene, proposal],
-                         positions[scene, partner], other_rotation[scene, partner], other_half[scene, partner]) > CONTACT_TOL
-        hit[scene[pairs], proposal[pairs]] = True
-        return hit
+        return Partners.of(np.stack([boxes.positions[j] for j in partners], axis=1), stack([boxes.reaches[j] for j in partners], (3,)),
+                           stack([boxes.halves[j] for j in partners], (3,)), stack([boxes.rotations[j] for j in partners], (3, 3)))
 
     def _free_space(self, k: int, shift: np.ndarray | None, boxes: _Boxes, i: int, partners: tuple[int, ...]) -> UniformSampler:
         """The exact free space of fixed box k in scene i: its region minus the partners' Minkowski obstacles."""

@@ -38,6 +38,7 @@ class GroupObject:
     partners: tuple[int, ...]  # objects (indices) whose boxes it may meet
     drawn: CandidateObject | None = None  # its size or yaw changes: drawn as candidate rounds draw it
     site: int = 0  # its index in the candidate plan (the counter-stream site of its centre there)
+    inside: tuple[int, ...] = ()  # objects outside its group it lies apart from because its anchor's box does
 
 
 def group_sweeps(objects: tuple[GroupObject, ...], asked: int) -> int:
@@ -76,19 +77,52 @@ def group_plan(plan: CandidatePlan, runtimes: Sequence[ObjectRuntime]) -> tuple[
         bounds[item.name] = (lo, hi)
         items.append((item.name, item.rotation, half, np.abs(item.rotation) @ half, prepared, anchor))
     _own_draws(plan, drawn)
+    index = {name: k for k, (name, *_) in enumerate(items)}
+    partners = [{j for j in range(len(items)) if j != k and _may_meet(k, j, items, bounds, runtimes)} for k in range(len(items))]
+    inside: dict[int, tuple[int, ...]] = {}
+    for k, (name, *_rest, anchor) in enumerate(items):
+        item = drawn.get(name)
+        if item is not None and _contained(item, items[index[anchor]][2]):  # type: ignore[index]
+            # Its boxes lie in its anchor's box, so it meets an object outside the group only where the anchor does,
+            # which the anchor's own tests exclude: those tests decide for it, and it needs none of its own.
+            group = {j for j, other in enumerate(items) if other[5] == anchor} | {index[anchor]}  # type: ignore[index]
+            inside[k] = tuple(sorted((partners[k] & partners[index[anchor]]) - group))  # type: ignore[index]
+            for j in inside[k]:
+                partners[k].discard(j)
+                partners[j].discard(k)
     objects = []
     for k, ((name, rotation, half, reach, prepared, anchor), rt) in enumerate(zip(items, runtimes)):
-        partners = tuple(j for j in range(len(items)) if j != k and _may_meet(k, j, items, bounds, runtimes))
         item = drawn.get(name)
         movable = name not in anchors and (item is not None or prepared.sampler is not None)  # type: ignore[union-attr]
         objects.append(GroupObject(name, rotation, half, reach, bool(plan.objects[k].upright),
-                                   item is None and axis_aligned(rotation), prepared, anchor, movable, partners, item, k))
-    for obj in objects:
+                                   item is None and axis_aligned(rotation), prepared, anchor, movable,
+                                   tuple(sorted(partners[k])), item, k, inside.get(k, ())))
+    for a, obj in enumerate(objects):
         group = {k for k, o in enumerate(objects) if o.anchor == obj.name}
         if obj.name in anchors and (obj.anchor is not None or obj.drawn is not None
-                                    or not all(set(objects[d].partners) <= group for d in group) or set(obj.partners) - group):
+                                    or not all(set(objects[d].partners) <= group for d in group)
+                                    or not all(_standing(objects[j], j, a, anchors) for j in set(obj.partners) - group)):
             raise Unbatchable(f"{obj.name}'s group meets objects outside it, so where it stands changes its law")
     return tuple(objects)
+
+
+def _contained(item: CandidateObject, anchor_half: np.ndarray) -> bool:
+    """Whether every box of a drawn object lies in its anchor's box: `completely in` the anchor's floor, which
+    lies within the anchor's box, and no taller than the anchor's top above that floor."""
+    region = item.region
+    if region.interior is None or not region.completely:
+        return False
+    tallest = float(item.sizes[2].hi[0])  # upright (group_plan's _drawable): its height is its extent up
+    floor = region.interior.floor_top
+    return bool(region.half_size[0] <= anchor_half[0] and region.half_size[1] <= anchor_half[1]
+                and -anchor_half[2] <= floor and floor + tallest <= anchor_half[2])
+
+
+def _standing(other: GroupObject, j: int, anchor: int, anchors: set[str | None]) -> bool:
+    """Whether an object outside an anchor's group that the anchor may meet stands still where the start put it
+    before the anchor: a fixed point, placed earlier, anchoring nothing (the anchor's start draw avoids it exactly)."""
+    return (j < anchor and other.anchor is None and other.name not in anchors and other.prepared is not None
+            and other.prepared.point is not None)
 
 
 def _drawable(item: CandidateObject, anchors: set[str | None], drawn: dict[str, CandidateObject], plan: CandidatePlan) -> None:

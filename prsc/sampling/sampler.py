@@ -16,6 +16,7 @@ from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from prsc.constraints.lower import lower_program
 from prsc.constraints.polytope_ir import ConstraintProgram
+from prsc.constraints.values import DIMENSIONS
 from prsc.errors import PrscError
 from prsc.ir.program import Program
 from prsc.task.bind import bind_task
@@ -30,7 +31,9 @@ from prsc.sampling.runtime import ObjectRuntime
 from prsc.sampling.sampler_plan import (
     BASELINE, BATCHED, CANDIDATE_ROUNDS, GIBBS_ROUNDS, HIT_AND_RUN, REJECTION, SamplerPlan, sampler_plan,
 )
-from prsc.sampling.scene_json import json_value, object_template, placed_template, quaternion_wxyz, scene_dict, scene_json
+from prsc.sampling.scene_json import (
+    SizedTemplate, json_value, object_template, placed_template, quaternion_wxyz, scene_dict, scene_json, sized_template,
+)
 from prsc.sampling.scene_text import SceneText, scene_encoder
 from prsc.sampling.stats import RejectionStats
 
@@ -84,6 +87,12 @@ class Sampler:
         self.templates: list[dict[str, Any] | None] = [
             object_template(plan.name, plan.class_name, plan.static_props, plan.span) if set(plan.property_fns) <= set(plan.static_props) else None
             for plan in self.constraints.objects
+        ]
+        # Objects whose properties change only in size (a part of random size) get all the rest built once.
+        self._sized: list[dict[str, Any] | SizedTemplate | None] = [
+            template if template is not None else sized_template(plan.name, plan.class_name, plan.static_props, plan.span)
+            if set(plan.property_fns) - set(plan.static_props) <= set(DIMENSIONS) else None
+            for template, plan in zip(self.templates, self.constraints.objects)
         ]
         self.classes: dict[str, list[str]] = {o.class_name: list(o.class_chain[1:]) for o in program.objects}
         self._engine: SequentialSampler | BaselineSampler
@@ -200,7 +209,7 @@ class Sampler:
     def to_json(self, result: SceneResult, seed: int, index: int) -> dict[str, Any]:
         """The scene JSON of a sampled scene (for callers that also keep its statistics)."""
         return self._with_task(scene_json(self.spec, int(seed), int(index), result.params, result.objects,
-                                          self.templates, self.classes))
+                                          self._sized, self.classes))
 
     def _with_task(self, scene: dict[str, Any]) -> dict[str, Any]:
         """The scene with its compiled task (key "task", docs/tasks.md) when the spec states one."""

@@ -16,7 +16,9 @@ dispatches on its `path`, and `prsc explain` prints it. The paths:
 Where candidate rounds could draw a spec, a pilot decides whether they pay: 8 scenes of a
 fixed pilot seed, read from the counter stream under that seed alone, so it draws no
 scene's numbers and shifts no scene's stream; it is part of building the plan, so every
-run (any -n, batch, --jobs or Ray worker) decides the same.
+run (any -n, batch, --jobs or Ray worker) decides the same. Where Gibbs rounds could draw
+it too and candidates pass often enough, the same 8 pilot scenes are drawn by Gibbs rounds
+and the costs per scene of the two paths are weighed (path_costs.py).
 """
 
 from __future__ import annotations
@@ -28,8 +30,10 @@ from prsc.constraints.polytope_ir import ConstraintProgram
 from prsc.sampling.batch_values import Unbatchable
 from prsc.sampling.batched import BatchPlan, batch_plan
 from prsc.sampling.candidate_plan import CandidatePlan, candidate_plan
-from prsc.sampling.candidates import CandidateSampler
+from prsc.sampling.candidates import BUDGET, PILOT_SCENES, PILOT_SEED, CandidateSampler
+from prsc.sampling.group_gibbs import GroupGibbs
 from prsc.sampling.group_members import GroupObject, group_plan, group_sweeps
+from prsc.sampling.path_costs import path_costs
 from prsc.sampling.runtime import ObjectRuntime
 
 BATCHED = "batched"
@@ -94,15 +98,38 @@ def sampler_plan(
         plan = candidate_plan(cprog, runtimes)
     except Unbatchable as reason:
         return SamplerPlan(SWEEPS, f"{unbatched}; no candidate rounds: {reason}", law, sweeps=sweeps)
-    if CandidateSampler(plan, cprog, runtimes).pays():
+    try:
+        group: tuple[GroupObject, ...] | None = group_plan(plan, runtimes)
+    except Unbatchable as reason:
+        group, no_group = None, reason
+    # Where Gibbs rounds could draw it too, the pilot draws every candidate a scene would: what candidates cost.
+    pilot = CandidateSampler(plan, cprog, runtimes).pilot((BUDGET,) if group is not None else (16, BUDGET))
+    few = "too few candidates pass (a pilot of 8 scenes found fewer than 4)"
+    if pilot.pays and group is None:
         return SamplerPlan(CANDIDATE_ROUNDS, f"{unbatched}; whole-scene candidates pass often enough (the pilot)",
                            law, candidates=plan, sweeps=sweeps)
-    few = "too few candidates pass (a pilot of 8 scenes found fewer than 4)"
-    try:
-        group = group_plan(plan, runtimes)
-    except Unbatchable as reason:
-        return SamplerPlan(SWEEPS, f"{unbatched}; {few}; no Gibbs rounds: {reason}", law, sweeps=sweeps)
+    if group is None:
+        return SamplerPlan(SWEEPS, f"{unbatched}; {few}; no Gibbs rounds: {no_group}", law, sweeps=sweeps)
     rounds = group_sweeps(group, sweeps)
+    if pilot.pays:
+        rows = GroupGibbs(group, cprog, runtimes, rounds).pilot_rows(PILOT_SEED, range(PILOT_SCENES))
+        costs = path_costs(pilot, len(plan.objects), rows, PILOT_SCENES)
+        if not costs.gibbs_pays:
+            return SamplerPlan(CANDIDATE_ROUNDS, f"{unbatched}; whole-scene candidates pass often enough: "
+                               f"{costs.describe()} (the pilots)", law, candidates=plan, sweeps=sweeps)
+        few = f"whole-scene candidates pass, but {costs.describe()} (the pilots)"
     drawn = [o.name for o in group if o.drawn is not None]
     afresh = f"; {', '.join(drawn)} drawn afresh in each update (their size or yaw changes between scenes)" if drawn else ""
-    return SamplerPlan(GIBBS_ROUNDS, f"{unbatched}; {few}; {rounds} sweeps{afresh}", law, group=group, sweeps=rounds)
+    return SamplerPlan(GIBBS_ROUNDS, f"{unbatched}; {few}; {rounds} sweeps{afresh}{_inside(group)}", law, group=group,
+                       sweeps=rounds)
+
+
+def _inside(group: tuple[GroupObject, ...]) -> str:
+    """Which objects lie in their anchor's box, so that the anchor's tests against objects outside decide for them."""
+    by_anchor: dict[str, list[GroupObject]] = {}
+    for obj in group:
+        if obj.inside and obj.anchor is not None:
+            by_anchor.setdefault(obj.anchor, []).append(obj)
+    return "".join(f"; {', '.join(o.name for o in inside)} lie in {anchor}'s box, whose tests against "
+                   f"{', '.join(sorted({group[j].name for o in inside for j in o.inside}))} decide for them"
+                   for anchor, inside in by_anchor.items())

@@ -8,6 +8,7 @@ Maps the compat properties: model_name "Camera" -> a camera object, "Tray"/"Tabl
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -207,17 +208,18 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
 
 def scene_json(
     spec: str, seed: int, index: int, params: dict[str, Any], objects: list[ObjectValue],
-    templates: list[dict[str, Any] | None] | None = None,
+    templates: list[dict[str, Any] | SizedTemplate | None] | None = None,
     classes: dict[str, list[str]] | None = None,
 ) -> dict[str, Any]:
-    """The whole scene as a JSON-ready dict (templates: per-object output of `object_template`;
-    classes: each object class's ancestors, most derived first)."""
+    """The whole scene as a JSON-ready dict (templates: per-object output of `object_template` or
+    `sized_template`; classes: each object class's ancestors, most derived first)."""
     out_params = {"ground": True}
     out_params.update({k: json_value(v) for k, v in params.items()})
     if templates is None:
         out_objects = [object_json(o) for o in objects]
     else:
-        out_objects = [object_json(o) if t is None else _from_template(t, o) for o, t in zip(objects, templates)]
+        out_objects = [object_json(o) if t is None else t.place(o) if isinstance(t, SizedTemplate) else _from_template(t, o)
+                       for o, t in zip(objects, templates)]
     return scene_dict(spec, seed, index, out_params, out_objects, classes if classes is not None else {})
 
 
@@ -242,6 +244,38 @@ def object_template(name: str, class_name: str, props: dict[str, Any], span: Spa
     dims = tuple(float(props[d]) for d in DIMENSIONS)
     stand_in = ObjectValue(name, class_name, span, np.zeros(3), np.eye(3), dims, dict(props))  # type: ignore[arg-type]
     return object_json(stand_in)
+
+
+@dataclass(frozen=True)
+class SizedTemplate:
+    """Everything but the pose, size and mass of an object whose other properties are the same in every scene
+    (a part of random size): its JSON is `object_json`'s at a fraction of the cost."""
+
+    template: dict[str, Any]
+    mass_from_size: bool  # no `mass` given: density times volume, as object_json computes it
+
+    def place(self, obj: ObjectValue) -> dict[str, Any]:
+        """The object's JSON (object_json's, with its errors where its size or mass is not valid)."""
+        assert obj.position is not None and obj.rotation is not None and obj.dims is not None
+        w, l, h = obj.dims
+        mass = DENSITY * w * l * h if self.mass_from_size else self.template["mass"]
+        if any(size_problem(float(v)) for v in obj.dims) or mass_problem(mass):
+            return object_json(obj)
+        out = placed_template(self.template, obj.position.tolist(), quaternion_wxyz(obj.rotation))
+        out["dimensions"] = [float(w), float(l), float(h)]
+        out["mass"] = mass
+        return out
+
+
+def sized_template(name: str, class_name: str, props: dict[str, Any], span: Span | None = None) -> SizedTemplate | None:
+    """The template of an object whose properties but its size are the same in every scene (`props`: those);
+    None where they are not valid (each scene's `object_json` reports it, as for any object)."""
+    stand_in = {d: 1.0 for d in DIMENSIONS}
+    stand_in.update(props)
+    try:
+        return SizedTemplate(object_template(name, class_name, stand_in, span), "mass" not in props)
+    except PrscError:
+        return None
 
 
 def _from_template(template: dict[str, Any], obj: ObjectValue) -> dict[str, Any]:

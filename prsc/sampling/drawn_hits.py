@@ -1,0 +1,107 @@
+"""Which proposals of a drawn box meet a partner's box, for many scenes at once (group_gibbs.py's
+updates of objects whose size or yaw changes between scenes; docs/sampling.md, "Gibbs rounds").
+
+A proposal meets a partner when their boxes collide as collisions.collide_pairs decides it: the
+axis-aligned boxes overlap by more than the contact tolerance on every world axis, and the
+smallest overlap over the SAT axes exceeds it too. For two upright boxes (both only yaw) most
+pairs are decided without the SAT, from two circles about each box's centre in the plane:
+- the SAT's horizontal overlap of two upright boxes is their penetration depth, which is at
+  least that of the circles they contain (radius: the smaller horizontal half extent) and at
+  most that of the circles containing them (radius: the half diagonal), so a pair whose
+  inscribed circles overlap by more than the tolerance collides (when their heights do), and a
+  pair whose circumscribed circles overlap by less does not;
+- both bounds hold with a margin far above rounding (`MARGIN`), so the pairs left to the SAT are
+  exactly those it would decide differently from the circles, and every decision is the SAT's.
+A proposal that surely meets one partner is not tested against the others.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from prsc.geometry.obb import CONTACT_TOL, pair_overlaps, upright_overlaps
+
+MARGIN = 1e-9  # metres: the circles decide only with this margin over rounding (scenes are ~1e-1 m, rounding ~1e-17 m)
+
+
+@dataclass(frozen=True)
+class Partners:
+    """A drawn box's partners in each scene, stacked: centres, reaches, half extents (m, P, 3), rotations
+    (m, P, 3, 3), and the radii of the circles each contains and is contained in (m, P)."""
+
+    positions: np.ndarray
+    reaches: np.ndarray
+    halves: np.ndarray
+    rotations: np.ndarray
+    inner: np.ndarray
+    outer: np.ndarray
+
+    @classmethod
+    def of(cls, positions: np.ndarray, reaches: np.ndarray, halves: np.ndarray, rotations: np.ndarray) -> "Partners":
+        """The partners of stacked boxes, with their circles."""
+        inner, outer = circles(halves)
+        return cls(positions, reaches, halves, rotations, inner, outer)
+
+    def rows(self, rows: np.ndarray) -> "Partners":
+        """These scenes' partners."""
+        return Partners(self.positions[rows], self.reaches[rows], self.halves[rows], self.rotations[rows],
+                        self.inner[rows], self.outer[rows])
+
+    def columns(self, columns: tuple[int, ...]) -> "Partners":
+        """These boxes of every scene (of a stack of every object's box: one object's partners)."""
+        pick = list(columns)
+        return Partners(self.positions[:, pick], self.reaches[:, pick], self.halves[:, pick], self.rotations[:, pick],
+                        self.inner[:, pick], self.outer[:, pick])
+
+    def refresh(self, k: int, position: np.ndarray, own: tuple[np.ndarray, np.ndarray, np.ndarray] | None) -> None:
+        """Box k of the stack moved to `position` (m, 3), and, for a drawn box, took these rotations, half extents
+        and reaches (`own`, one row per scene)."""
+        self.positions[:, k] = position
+        if own is not None:
+            self.rotations[:, k], self.halves[:, k], self.reaches[:, k] = own
+            self.inner[:, k], self.outer[:, k] = circles(own[1])
+
+
+def circles(halves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Radii of the circles an upright box of these half extents contains and is contained in, in the plane."""
+    return np.minimum(halves[..., 0], halves[..., 1]), np.hypot(halves[..., 0], halves[..., 1])
+
+
+def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, reaches: np.ndarray, live: np.ndarray,
+               others: Partners, upright: bool) -> np.ndarray:
+    """Which live proposals (m, s, ...: s per scene) collide with a partner's box in their scene: one broad phase
+    over every (proposal, partner) pair (with the circles where all are upright), one SAT call for the pairs left."""
+    hit = np.zeros(live.shape, dtype=bool)
+    positions = others.positions
+    if not positions.shape[1]:
+        return hit
+    gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(3)]  # (m, s, P) each
+    # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
+    high, tall = np.abs(gaps[2]), reaches[:, :, None, 2] + others.reaches[:, None, :, 2]
+    close = live[:, :, None] & (high < tall - CONTACT_TOL)
+    if upright:
+        inner, outer = circles(halves)
+        apart = np.sqrt(gaps[0] * gaps[0] + gaps[1] * gaps[1])
+        sure = (high < tall - (CONTACT_TOL + MARGIN)) & (apart < inner[:, :, None] + others.inner[:, None, :] - (CONTACT_TOL + MARGIN))
+        hit = np.any(sure & close, axis=2)
+        close &= ~hit[:, :, None]
+        close &= apart < outer[:, :, None] + others.outer[:, None, :] - (CONTACT_TOL - MARGIN)
+        scene, proposal, partner = np.nonzero(close)
+        near = np.ones(len(scene), dtype=bool)  # the world axes' broad phase, on the few pairs left
+        for axis in range(2):
+            near &= np.abs(gaps[axis][scene, proposal, partner]) < \
+                reaches[scene, proposal, axis] + others.reaches[scene, partner, axis] - CONTACT_TOL
+        scene, proposal, partner = scene[near], proposal[near], partner[near]
+    else:
+        for axis in range(2):
+            close &= np.abs(gaps[axis]) < reaches[:, :, None, axis] + others.reaches[:, None, :, axis] - CONTACT_TOL
+        scene, proposal, partner = np.nonzero(close)
+    if not len(scene):
+        return hit
+    overlaps = upright_overlaps if upright else pair_overlaps
+    pairs = overlaps(centres[scene, proposal], rotations[scene, proposal], halves[scene, proposal],
+                     positions[scene, partner], others.rotations[scene, partner], others.halves[scene, partner]) > CONTACT_TOL
+    hit[scene[pairs], proposal[pairs]] = True
+    return hit
