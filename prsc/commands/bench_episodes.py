@@ -7,13 +7,16 @@ IK models, MuJoCo's mesh cache), then the other n-1 in this process, as one work
 `prsc run` runs them. Reports CPU seconds per episode (process time, all threads: the
 GL rasteriser's too), episodes per CPU-second, and the CPU spent loading MJCF files,
 stepping (`mj_step`) and rendering. A spec with a task (docs/tasks.md) runs each
-measured episode twice, with and without the task monitor, interleaved, and reports the
-monitor's share of an episode's CPU.
+measured episode twice, with and without the task monitor, back to back (which one first
+alternates from scene to scene), and reports the monitor's cost as the median over scenes of
+the ratio of the two episodes' CPU, with its quartiles: a ratio of one scene's two runs,
+taken side by side, is what survives the load of a shared machine (docs/tasks.md, Cost).
 """
 
 from __future__ import annotations
 
 import os
+import statistics
 import tempfile
 import time
 from collections import Counter
@@ -65,6 +68,7 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
         tasks, _ = episode_tasks(root, None, 0, parse_target(controller), DEFAULT_MAX_SIM_SECONDS)
         run_episodes(executor, config, tasks[:1], lambda record: None)
         records: list[dict] = []
+        ratios: list[float] = []  # per scene: CPU monitored / CPU without the task
         totals: Counter = Counter()
         with_task = bool(tasks and tasks[0].scene.get("task"))
         with _timed(harness, "load_model", totals, "load"), _timed(mujoco, "mj_step", totals, "step"), \
@@ -74,19 +78,40 @@ def bench(spec: str, n: int, controller: str, include_dirs: list[str]) -> dict:
                 _timed(task_monitor.TaskMonitor, "log", totals, "monitor"), \
                 _timed(task_monitor.TaskMonitor, "update", totals, "monitor"), \
                 _timed(task_monitor.TaskMonitor, "result", totals, "monitor"):
-            for task in tasks[1:]:  # interleaved: both sides see the same machine load
+            for k, task in enumerate(tasks[1:]):  # interleaved: both sides see the same machine load
+                plain_first = k % 2 == 1 and with_task  # which runs first alternates: neither side always follows the other
+                if plain_first:
+                    without = _cpu(run_episodes, executor, config, [dataclasses.replace(task, monitor_task=False)])
                 cpu, wall = time.process_time(), time.perf_counter()
                 run_episodes(executor, config, [task], records.append)
-                totals["cpu"] += time.process_time() - cpu
+                monitored = time.process_time() - cpu
+                totals["cpu"] += monitored
                 totals["wall"] += time.perf_counter() - wall
                 if with_task:
-                    cpu = time.process_time()
-                    run_episodes(executor, config, [dataclasses.replace(task, monitor_task=False)], lambda r: None)
-                    totals["cpu_without_task"] += time.process_time() - cpu
+                    if not plain_first:
+                        without = _cpu(run_episodes, executor, config, [dataclasses.replace(task, monitor_task=False)])
+                    totals["cpu_without_task"] += without
+                    ratios.append(monitored / max(without, 1e-9))
     totals["episodes"] = len(records)
     totals["sim"] = sum(r["sim_seconds"] for r in records)
     return {"totals": totals, "outcomes": Counter(r["outcome"] for r in records), "with_task": with_task,
+            "ratios": ratios,
             "task_outcomes": Counter(r["task"]["outcome"] for r in records if r.get("task"))}
+
+
+def _cpu(run, *args) -> float:
+    """The process CPU seconds of run(*args, a record callback that drops the record)."""
+    start = time.process_time()
+    run(*args, lambda record: None)
+    return time.process_time() - start
+
+
+def overhead(ratios: list[float]) -> tuple[float, float, float]:
+    """The median and quartiles of per-scene CPU ratios (monitored / without), as % overheads."""
+    if len(ratios) < 2:
+        return (100 * (ratios[0] - 1),) * 3 if ratios else (float("nan"),) * 3
+    low, median, high = statistics.quantiles(ratios, n=4)
+    return 100 * (median - 1), 100 * (low - 1), 100 * (high - 1)
 
 
 def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) -> None:
@@ -106,8 +131,10 @@ def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) 
     print("  outcomes: " + ", ".join(f"{o} {c}" for o, c in found["outcomes"].most_common()))
     if found["with_task"]:
         without = t["cpu_without_task"]
+        median, low, high = overhead(found["ratios"])
         print(f"  the task: {t['cpu'] / episodes:.3f} CPU s per episode monitored, {without / episodes:.3f} without "
-              f"(the same episodes, interleaved): {100 * (t['cpu'] - without) / max(without, 1e-9):+.1f}%; "
+              f"(the same episodes, interleaved): {100 * (t['cpu'] - without) / max(without, 1e-9):+.1f}% in total; "
+              f"per scene, median {median:+.1f}% (quartiles {low:+.1f}% to {high:+.1f}%, n={len(found['ratios'])}); "
               f"the monitor's own work {t['monitor'] / episodes:.3f} CPU s per episode "
               f"({100 * t['monitor'] / max(t['cpu'], 1e-9):.1f}% of a monitored episode)")
         print("  task outcomes: " + ", ".join(f"{o} {c}" for o, c in found["task_outcomes"].most_common()))
