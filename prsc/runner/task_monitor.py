@@ -19,6 +19,8 @@ from prsc.task.world import DISTANCE_CAP, Pose, WorldState
 __all__ = ["TaskMonitor", "TaskStatus", "CONTROL_PERIOD"]
 
 _geom_distance = mujoco.mj_geomDistance
+_object_velocity = mujoco.mj_objectVelocity
+_BODY = mujoco.mjtObj.mjOBJ_BODY
 CONTROL_PERIOD = 0.02  # s of simulated time between two evaluations of the task (50 Hz)
 LOGGED_STATES = 50  # states TaskMonitor.log keeps before evaluating them (1 s of control steps)
 _LOGGED = mujoco.mjtState.mjSTATE_FULLPHYSICS  # time, positions, velocities, activations, mocap poses
@@ -67,6 +69,7 @@ class MjWorld:
         self._fixed_bodies = frozenset(b for b in self.body.values()
                                        if model.body_weldid[b] == 0 and model.body_mocapid[b] < 0)
         self._fixed_poses: dict[str, tuple[int, Pose]] = {}
+        self._views: tuple = (None,)  # (an MjData, its xpos, its xmat as (nbody, 3, 3)): views made once
         welded = model.body_weldid[model.geom_bodyid] == 0
         self._moving = ~(welded & (model.body_mocapid[model.geom_bodyid] < 0))
         self._fromto = np.zeros(6)
@@ -149,11 +152,14 @@ class MjWorld:
                 found = self._fixed_poses[name] = (data._address, Pose(data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy(),
                                                                      _STILL, _STILL))
             return found[1]
+        views = self._views
+        if views[0] is not data:  # another MjData than the last one asked about (kept: its arrays stay valid)
+            views = self._views = (data, data.xpos, data.xmat.reshape(-1, 3, 3))
         if not moving:
-            return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), _STILL, _STILL)
+            return Pose(views[1][b], views[2][b], _STILL, _STILL)
         velocity = np.zeros(6)
-        mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_BODY, b, velocity, 0)
-        return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), velocity[3:], velocity[:3])
+        _object_velocity(self.model, data, _BODY, b, velocity, 0)
+        return Pose(views[1][b], views[2][b], velocity[3:], velocity[:3])
 
     def distances(self, data: mujoco.MjData, lower2: np.ndarray | None = None,
                   least: dict | None = None) -> StateDistances:
@@ -241,10 +247,10 @@ def _has(task: Task, name: str) -> bool:
 class TaskMonitor:
     """The task of `scene["task"]` over one MuJoCo episode: `update` once per control step, `result` at the end.
 
-    `log` instead of `update` keeps the step's state and evaluates the kept states together, on the
-    monitor's own MjData, when LOGGED_STATES are kept or the result is asked for: the same statuses
-    (positions and velocities are recomputed from the same state by the same MuJoCo functions), at
-    about half the cost. A controller runs between two control steps and leaves the evaluator's code
+    `log` instead of `update` keeps the step's state (and its geoms' positions, for the broad phase)
+    and evaluates the kept states together, on the monitor's own MjData, when LOGGED_STATES are kept
+    or the result is asked for: the same statuses (positions and velocities are recomputed from the
+    same state by the same MuJoCo functions), at about half the cost. A controller runs between two control steps and leaves the evaluator's code
     and data out of the CPU's caches: one update took 137 us so against 64 us in a row (measured,
     docs/tasks.md, Cost). Whoever reads each step's status as it happens (`latest`) uses `update`."""
 
@@ -313,7 +319,6 @@ class _LazyPoses(dict):
     """Poses read from MjData when the evaluator first asks for them."""
 
     def __init__(self, world: MjWorld, data: mujoco.MjData, moving: frozenset[str]):
-        super().__init__()
         self.world, self.data, self.moving = world, data, moving
 
     def __missing__(self, name: str) -> Pose:
