@@ -134,8 +134,9 @@ def print_episodes(spec: str, n: int, controller: str, include_dirs: list[str]) 
     if found["with_task"]:
         with_task, without = t["cpu_with_task"], t["cpu_without_task"]
         median, low, high = overhead(found["ratios"])
-        print(f"  the task: each scene's episode again with and without it, back to back: {with_task / episodes:.3f} "
-              f"vs {without / episodes:.3f} CPU s per episode ({100 * (with_task - without) / max(without, 1e-9):+.1f}% "
+        total = 100 * (with_task - without) / max(without, 1e-9)
+        print(f"  the task: each scene's episode again with and without it, back to back: "
+              f"{with_task / episodes:.3f} vs {without / episodes:.3f} CPU s per episode ({total:+.1f}% "
               f"in total); per scene, median {median:+.1f}% (quartiles {low:+.1f}% to {high:+.1f}%, "
               f"n={len(found['ratios'])}); the monitor's evaluation {t['monitor'] / episodes:.3f} CPU s per episode")
         print("  task outcomes: " + ", ".join(f"{o} {c}" for o, c in found["task_outcomes"].most_common()))

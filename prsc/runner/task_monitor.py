@@ -89,7 +89,8 @@ class MjWorld:
         self._batch_boxes = None  # placed at the first state (place)
 
     def place(self, data: mujoco.MjData) -> None:
-        """Once per episode (later calls return), from the poses of a state (`data`'s, computed): the batch rows' box offsets are their geoms' offset plus a constant (a moving geom's box is
+        """Once per episode (later calls return), from the poses of a state (`data`'s, computed): the
+        batch rows' box offsets are their geoms' offset plus a constant (a moving geom's box is
         centred on it, a fixed one's does not move), and their summed half sizes."""
         if self._batch_boxes is not None:
             return
@@ -195,8 +196,9 @@ class StateDistances:
             best = min(best, _geom_distance(model, data, nearest[0], nearest[1], DISTANCE_CAP, world._fromto))
             if enough is not None and best <= enough:
                 return best  # the caller's answer does not depend on how much nearer the geoms are
-        if self._least is not None and best > 0.0:
-            low, row, other = self._least[pair]
+        least = None if self._least is None else self._least.get(pair)
+        if least is not None and best > 0.0:
+            low, row, other = least
             if best * best <= (other if nearest is not None and row == world._nearest_row[pair] else low):
                 # no pair but the nearest one has a bound under its distance: the loop below would compute none
                 self.exact[pair] = best = float(best)
@@ -250,9 +252,10 @@ class TaskMonitor:
     `log` instead of `update` keeps the step's state (and its geoms' positions, for the broad phase)
     and evaluates the kept states together, on the monitor's own MjData, when LOGGED_STATES are kept
     or the result is asked for: the same statuses (positions and velocities are recomputed from the
-    same state by the same MuJoCo functions), at about half the cost. A controller runs between two control steps and leaves the evaluator's code
-    and data out of the CPU's caches: one update took 137 us so against 64 us in a row (measured,
-    docs/tasks.md, Cost). Whoever reads each step's status as it happens (`latest`) uses `update`."""
+    same state by the same MuJoCo functions), at about half the cost. A controller runs between two
+    control steps and leaves the evaluator's code and data out of the CPU's caches: one update took
+    137 us so against 64 us in a row (measured, docs/tasks.md, Cost). Whoever reads each step's
+    status as it happens (`latest`) uses `update`."""
 
     def __init__(self, scene: dict, model: mujoco.MjModel):
         self.task = Task.from_json(scene["task"])
