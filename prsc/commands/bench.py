@@ -186,6 +186,10 @@ def run(args: argparse.Namespace) -> int:
     if not args.seconds > 0:  # also refuses nan, which would never stop a measurement
         raise PrscError(f"--seconds must be > 0, got {args.seconds}")
     check_seed_and_jobs(args.seed)
+    if args.episodes:
+        from prsc.runner.gl import choose_gl_backend
+
+        choose_gl_backend()  # before compiling: a file arm's compile imports mujoco, which fixes its GL backend then
     from prsc.ir import compile_program
 
     for path in args.files:

@@ -4,6 +4,7 @@ bounding-sphere broad phase), handed to the one evaluator of prsc/task."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -18,6 +19,8 @@ from prsc.task.world import DISTANCE_CAP, Pose, WorldState
 __all__ = ["TaskMonitor", "TaskStatus", "CONTROL_PERIOD"]
 
 _geom_distance = mujoco.mj_geomDistance
+_object_velocity = mujoco.mj_objectVelocity
+_BODY = mujoco.mjtObj.mjOBJ_BODY
 CONTROL_PERIOD = 0.02  # s of simulated time between two evaluations of the task (50 Hz)
 LOGGED_STATES = 50  # states TaskMonitor.log keeps before evaluating them (1 s of control steps)
 _LOGGED = mujoco.mjtState.mjSTATE_FULLPHYSICS  # time, positions, velocities, activations, mocap poses
@@ -76,11 +79,13 @@ class MjWorld:
         self._fixed_bodies = frozenset(b for b in self.body.values()
                                        if model.body_weldid[b] == 0 and model.body_mocapid[b] < 0)
         self._fixed_poses: dict[str, tuple[int, Pose]] = {}
+        self._views: tuple = (None,)  # (an MjData, its xpos, its xmat as (nbody, 3, 3)): views made once
         welded = model.body_weldid[model.geom_bodyid] == 0
         self._moving = ~(welded & (model.body_mocapid[model.geom_bodyid] < 0))
         self._fromto = np.zeros(6)
         self._pair_geoms: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self._nearest: dict[tuple[str, str], tuple[int, int]] = {}  # each pair's nearest geoms at the last state
+        self._nearest_row: dict[tuple[str, str], int] = {}  # their row among a batch pair's (from its first)
         self.prepare(())
 
     def prepare(self, pairs) -> None:
@@ -91,11 +96,14 @@ class MjWorld:
         self._batch_b = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, int)
         bounds = np.cumsum([0] + [len(p[0]) for p in parts]).tolist()
         self._batch_rows = {pair: (first, last) for pair, first, last in zip(self._batch, bounds[:-1], bounds[1:])}
-        self._batch_boxes = None  # placed at the first state
+        self._batch_boxes = None  # placed at the first state (place)
 
-    def _place_batch(self, data: mujoco.MjData) -> None:
-        """The batch rows' box offsets are their geoms' offset plus a constant (a moving geom's box is
+    def place(self, data: mujoco.MjData) -> None:
+        """Once per episode (later calls return), from the poses of a state (`data`'s, computed): the
+        batch rows' box offsets are their geoms' offset plus a constant (a moving geom's box is
         centred on it, a fixed one's does not move), and their summed half sizes."""
+        if self._batch_boxes is not None:
+            return
         centres, halves = self._boxes(data)
         a, b, position = self._batch_a, self._batch_b, data.geom_xpos
         shift = (centres[a] - position[a]) - (centres[b] - position[b])
@@ -120,14 +128,25 @@ class MjWorld:
                           np.einsum("nij,nj->ni", np.abs(rotations), local[:, 3:]))
         return centres, halves
 
-    def batch_lower_bounds(self, data: mujoco.MjData, positions: np.ndarray | None = None) -> np.ndarray:
-        """Squared broad-phase bounds of every batch row (geom pair) in `data`'s state, or, given
-        `positions` (states, ngeom, 3) of geoms in states of the same episode, in each of those."""
-        if self._batch_boxes is None:
-            self._place_batch(data)
+    def batch_lower_bounds(self, positions: np.ndarray) -> np.ndarray:
+        """Squared broad-phase bounds of every batch row (geom pair) given the geoms' `positions`
+        (ngeom, 3) in one state, or (states, ngeom, 3) in several states of the episode (after place)."""
         shift, halves = self._batch_boxes
-        position = data.geom_xpos if positions is None else positions
-        return _squared_box_gaps(position[..., self._batch_a, :] - position[..., self._batch_b, :] + shift, halves)
+        return _squared_box_gaps(positions[..., self._batch_a, :] - positions[..., self._batch_b, :] + shift, halves)
+
+    def least_bounds(self, lower2: np.ndarray) -> list[dict[tuple[str, str], tuple[float, int, float]]]:
+        """Per state (row of `lower2`, batch_lower_bounds of several states): each batch pair's least
+        squared bound, the row it is in (counted from the pair's first row) and the least of the others."""
+        states, columns = len(lower2), []
+        for first, last in self._batch_rows.values():
+            bounds = lower2[:, first:last]
+            if last - first >= 2:
+                two = np.partition(bounds, 1, axis=1)
+                columns.append(zip(two[:, 0].tolist(), bounds.argmin(axis=1).tolist(), two[:, 1].tolist()))
+            else:  # one geom pair or none: no other
+                least = bounds[:, 0].tolist() if last > first else [math.inf] * states
+                columns.append(zip(least, [0] * states, [math.inf] * states))
+        return [dict(zip(self._batch_rows, found)) for found in zip(*columns)] if columns else [{}] * states
 
     def lower_bounds(self, data: mujoco.MjData, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
         """Squared broad-phase bounds of geom pairs (ia[k], ib[k]) outside the batch."""
@@ -154,16 +173,20 @@ class MjWorld:
                 found = self._fixed_poses[name] = (data._address, Pose(data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy(),
                                                                      _STILL, _STILL))
             return found[1]
+        views = self._views
+        if views[0] is not data:  # another MjData than the last one asked about (kept: its arrays stay valid)
+            views = self._views = (data, data.xpos, data.xmat.reshape(-1, 3, 3))
         if not moving:
-            return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), _STILL, _STILL)
+            return Pose(views[1][b], views[2][b], _STILL, _STILL)
         velocity = np.zeros(6)
-        mujoco.mj_objectVelocity(self.model, data, mujoco.mjtObj.mjOBJ_BODY, b, velocity, 0)
-        return Pose(data.xpos[b], data.xmat[b].reshape(3, 3), velocity[3:], velocity[:3])
+        _object_velocity(self.model, data, _BODY, b, velocity, 0)
+        return Pose(views[1][b], views[2][b], velocity[3:], velocity[:3])
 
-    def distances(self, data: mujoco.MjData, lower2: np.ndarray | None = None) -> StateDistances:
-        """The distances between geoms of `data`'s present state, computed when asked (`lower2`: the
-        batch's broad phase in this state, when already computed)."""
-        return StateDistances(self, data, lower2)
+    def distances(self, data: mujoco.MjData, lower2: np.ndarray | None = None,
+                  least: dict | None = None) -> StateDistances:
+        """The distances between geoms of `data`'s present state, computed when asked (`lower2`, `least`:
+        the batch's broad phase in this state and its least bounds, when already computed)."""
+        return StateDistances(self, data, lower2, least)
 
 
 class StateDistances:
@@ -172,10 +195,12 @@ class StateDistances:
     geoms' world-aligned boxes bounds theirs below, so only pairs whose bound is under the best
     distance found so far are computed, starting from the pair nearest at the last state."""
 
-    def __init__(self, world: MjWorld, data: mujoco.MjData, lower2: np.ndarray | None = None):
+    def __init__(self, world: MjWorld, data: mujoco.MjData, lower2: np.ndarray | None = None,
+                 least: dict | None = None):
         self.world, self.data = world, data
         self.exact: dict[tuple[str, str], float] = {}
         self._lower2 = lower2  # the squared broad-phase bound of every batch row, once per state
+        self._least = least  # MjWorld.least_bounds of this state, when computed
 
     def __call__(self, a: str, b: str, enough: float | None = None) -> float:
         """The distance between a's and b's geoms; when `enough` is given and it is at most `enough`,
@@ -191,28 +216,36 @@ class StateDistances:
             best = min(best, _geom_distance(model, data, nearest[0], nearest[1], DISTANCE_CAP, world._fromto))
             if enough is not None and best <= enough:
                 return best  # the caller's answer does not depend on how much nearer the geoms are
+        least = None if self._least is None else self._least.get(pair)
+        if least is not None and best > 0.0:
+            low, row, other = least
+            if best * best <= (other if nearest is not None and row == world._nearest_row[pair] else low):
+                # no pair but the nearest one has a bound under its distance: the loop below would compute none
+                self.exact[pair] = best = float(best)
+                return best
         rows = world._batch_rows.get(pair)
         if rows is None:  # a pair the task did not announce (prepare): its own broad phase
             ia, ib = world._pairs_of(a, b)
             lower2 = world.lower_bounds(data, ia, ib)
         else:
             if self._lower2 is None:
-                self._lower2 = world.batch_lower_bounds(data)
+                world.place(data)
+                self._lower2 = world.batch_lower_bounds(data.geom_xpos)
             first, last = rows
             ia, ib, lower2 = world._batch_a[first:last], world._batch_b[first:last], self._lower2[first:last]
         if best > 0.0:
             candidates = (lower2 < best * best).nonzero()[0]
             if candidates.size:
                 # nearest bound first: a pair whose bound is past the best found so far is not computed
-                for low2, first, second in sorted(zip(lower2[candidates].tolist(), ia[candidates].tolist(),
-                                                      ib[candidates].tolist())):
+                for low2, first, second, row in sorted(zip(lower2[candidates].tolist(), ia[candidates].tolist(),
+                                                           ib[candidates].tolist(), candidates.tolist())):
                     if low2 >= best * best:
                         break
                     if (first, second) == nearest:
                         continue
                     d = _geom_distance(model, data, first, second, best, world._fromto)
                     if d < best:
-                        best, world._nearest[pair] = d, (first, second)
+                        best, world._nearest[pair], world._nearest_row[pair] = d, (first, second), row
         self.exact[pair] = best = float(best)
         return best
 
@@ -236,12 +269,13 @@ def _has(task: Task, name: str) -> bool:
 class TaskMonitor:
     """The task of `scene["task"]` over one MuJoCo episode: `update` once per control step, `result` at the end.
 
-    `log` instead of `update` keeps the step's state and evaluates the kept states together, on the
-    monitor's own MjData, when LOGGED_STATES are kept or the result is asked for: the same statuses
-    (positions and velocities are recomputed from the same state by the same MuJoCo functions), at
-    about half the cost. A controller runs between two control steps and leaves the evaluator's code
-    and data out of the CPU's caches: one update took 137 us so against 64 us in a row (measured,
-    docs/tasks.md, Cost). Whoever reads each step's status as it happens (`latest`) uses `update`."""
+    `log` instead of `update` keeps the step's state (and its geoms' positions, for the broad phase)
+    and evaluates the kept states together, on the monitor's own MjData, when LOGGED_STATES are kept
+    or the result is asked for: the same statuses (positions and velocities are recomputed from the
+    same state by the same MuJoCo functions), at about half the cost. A controller runs between two
+    control steps and leaves the evaluator's code and data out of the CPU's caches: one update took
+    137 us so against 64 us in a row (measured, docs/tasks.md, Cost). Whoever reads each step's
+    status as it happens (`latest`) uses `update`."""
 
     def __init__(self, scene: dict, model: mujoco.MjModel):
         self.task = Task.from_json(scene["task"])
@@ -252,43 +286,46 @@ class TaskMonitor:
         self.monitor = EpisodeMonitor(self.task)
         self.latest: TaskStatus | None = None  # the last update's status (a dataset recorder's frames read it)
         self._logged = np.zeros((LOGGED_STATES, mujoco.mj_stateSize(model, _LOGGED)))
+        self._positions = np.zeros((LOGGED_STATES, model.ngeom, 3))  # their geoms' positions (broad phase)
         self._count = 0
         self._replay: mujoco.MjData | None = None
 
     def log(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
-        """Keep `data`'s state at this control step, to be evaluated with the next ones."""
+        """Keep `data`'s state at this control step, to be evaluated with the next ones; `data`'s
+        positions are those of its state, as in a control callback (mj_step computed them)."""
+        if not self._count:
+            self.world.place(data)
         mujoco.mj_getState(model, data, self._logged[self._count], _LOGGED)
+        # the geoms' positions for the broad phase: mj_kinematics of the state would give these same numbers
+        self._positions[self._count] = data.geom_xpos
         self._count += 1
         if self._count == LOGGED_STATES:
             self.evaluate_logged()
 
     def evaluate_logged(self) -> None:
-        """Evaluate the logged states in order (`update` on each), on the monitor's own MjData: first
-        their geoms' positions, for one broad phase over all of them, then each state's task."""
+        """Evaluate the logged states in order (`update` on each), on the monitor's own MjData, after
+        one broad phase over all of their geoms' positions."""
         if not self._count:
             return
         if self._replay is None:
             self._replay = mujoco.MjData(self.model)
         model, replay, rows = self.model, self._replay, self._logged[:self._count]
-        positions = np.empty((len(rows), model.ngeom, 3))
-        for row, position in zip(rows, positions):
-            mujoco.mj_setState(model, replay, row, _LOGGED)
-            mujoco.mj_kinematics(model, replay)
-            position[:] = replay.geom_xpos
-        lower2 = self.world.batch_lower_bounds(replay, positions)
-        for row, bounds in zip(rows, lower2):
+        lower2 = self.world.batch_lower_bounds(self._positions[:self._count])
+        for row, bounds, least in zip(rows, lower2, self.world.least_bounds(lower2)):
             mujoco.mj_setState(model, replay, row, _LOGGED)
             # what the task reads: body and geom poses, centres of mass and velocities
             mujoco.mj_kinematics(model, replay)
             mujoco.mj_comPos(model, replay)
             mujoco.mj_comVel(model, replay)
-            self.latest = self.monitor.update(self.state(model, replay, bounds))
+            self.latest = self.monitor.update(self.state(model, replay, bounds, least))
         self._count = 0
 
-    def state(self, model: mujoco.MjModel, data: mujoco.MjData, lower2: np.ndarray | None = None) -> WorldState:
-        """The world state of `data` at `data.time` (distances computed when the task asks)."""
+    def state(self, model: mujoco.MjModel, data: mujoco.MjData, lower2: np.ndarray | None = None,
+              least: dict | None = None) -> WorldState:
+        """The world state of `data` at `data.time` (distances computed when the task asks; `lower2`,
+        `least`: its broad phase, computed with other logged states)."""
         poses = _LazyPoses(self.world, data, self.moving)
-        return WorldState(float(data.time), poses, self.world.distances(data, lower2))
+        return WorldState(float(data.time), poses, self.world.distances(data, lower2, least))
 
     def update(self, model: mujoco.MjModel, data: mujoco.MjData) -> TaskStatus:
         """Evaluate the task at `data.time`."""
@@ -305,7 +342,6 @@ class _LazyPoses(dict):
     """Poses read from MjData when the evaluator first asks for them."""
 
     def __init__(self, world: MjWorld, data: mujoco.MjData, moving: frozenset[str]):
-        super().__init__()
         self.world, self.data, self.moving = world, data, moving
 
     def __missing__(self, name: str) -> Pose:

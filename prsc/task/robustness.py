@@ -99,6 +99,18 @@ class Evaluator:
         if op == "distance":
             first, second = children
             return lambda w: _norm(np.asarray(first(w), dtype=float) - np.asarray(second(w), dtype=float))
+        if op in ("and", "or") and len(children) == 2:  # the common case, without the lists (every control step)
+            first, second = children
+            if op == "and":
+                def both(w):
+                    a, b = first(w), second(w)
+                    return Truth(bool(a.holds and b.holds), min(a.robustness, b.robustness))
+                return both
+
+            def either(w):
+                a, b = first(w), second(w)
+                return Truth(bool(a.holds or b.holds), max(a.robustness, b.robustness))
+            return either
         if op == "and":
             def conjunction(w):
                 parts = [f(w) for f in children]

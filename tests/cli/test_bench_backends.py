@@ -48,4 +48,9 @@ def test_bench_episodes_reports_cpu_per_episode_and_where_it_goes(capsys):
     assert per_episode and float(per_episode.group(1)) > 0
     assert abs(float(per_episode.group(1)) * float(per_episode.group(2)) - 1) < 0.01
     assert re.search(r"load [\d.]+, mj_step [\d.]+ .* render [\d.]+", out) and "outcomes: " in out
+    # the split counts the timed episode only (the task's paired runs are untimed): nothing is counted twice
+    rest = re.search(r"controller and the rest (-?[\d.]+) CPU s", out)
+    assert rest and float(rest.group(1)) >= 0
+    # the handover states a task: its cost as the median of per-scene ratios, and their quartiles
+    assert re.search(r"per scene, median [+-][\d.]+% \(quartiles [+-][\d.]+% to [+-][\d.]+%, n=1\)", out)
     assert main(["bench", "--episodes", str(REPO / "specs" / "table_cube.prs"), "-n", "1"]) == 2
