@@ -5,7 +5,8 @@ files, each in turn in the same run, then one table of them all.
 
 Rows: drawing the scene alone, through `scenario.drawer` as `SceneEnv.reset` does (its first
 draw RESET_DRAW_AHEAD scenes, each later one twice the last up to RESET_DRAW_AHEAD_MAX, over
-enough scenes that most come from full batches, the ramp included) and one at a time through
+enough scenes that most come from full batches, the ramp included; then on, full batches only)
+and one at a time through
 `scenario.scene`; `apply` alone and a compile alone (scenes drawn beforehand); draw + apply (an
 RL reset) and draw + compile (the path without `apply`), from those rates; and a 4-environment
 `gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed, with
@@ -21,6 +22,7 @@ from typing import Any, Callable
 
 VECTOR_ENVS = 4
 DRAWN = "draw a scene (as a reset)"
+STEADY = "draw a scene (full batches)"
 
 
 def _rate(count: int, work: Callable[[int], Any]) -> float:
@@ -47,17 +49,22 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     # ramp of small draws is in the rate, and enough scenes follow it that full batches dominate.
     # One scene at a time through `scenario.scene` is kept as a row to compare against.
     draw = scenario.drawer(seed + 1, RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX)
-    drawn = _rate(max(n, 4 * RESET_DRAW_AHEAD_MAX), lambda k: draw(k))
+    ramped = max(n, 4 * RESET_DRAW_AHEAD_MAX)
+    drawn = _rate(ramped, lambda k: draw(k))
+    # Then the same loop on, every draw a full batch: what a long training run's resets cost.
+    drawn_steady = _rate(3 * RESET_DRAW_AHEAD_MAX, lambda k: draw(ramped + k))
     drawn_singly = _rate(max(1, n // 4), lambda k: scenario.scene(seed, n + 1 + k))
     applied = _rate(n, lambda k: scenario.apply(scenes[k], model, data))
     compiled_rate = _rate(compiled, lambda k: mujoco_model(scenes[k]))
     rates = {
         DRAWN: drawn,
+        STEADY: drawn_steady,
         "draw a scene (one at a time)": drawn_singly,
         "apply (scene drawn)": applied,
         "compile (scene drawn)": compiled_rate,
         # Drawing then writing: the two costs add up, as in a reset.
         "draw + apply": 1 / (1 / drawn + 1 / applied),
+        "draw + apply (full batches)": 1 / (1 / drawn_steady + 1 / applied),
         "draw + compile": 1 / (1 / drawn + 1 / compiled_rate),
     }
     try:
@@ -113,7 +120,8 @@ def print_resets(specs: list[str], n: int, include_dirs: list[str]) -> None:
         print(f"prsc reset benchmark: {spec}, {n} scenes, one core, load average {os.getloadavg()[0]:.2f}")
         print(f"  apply is {rates['apply (scene drawn)'] / rates['compile (scene drawn)']:,.0f}x a compile per scene; "
               f"a reset (draw + apply) {rates['draw + apply'] / rates['draw + compile']:,.1f}x draw + compile, "
-              f"{rates['draw + apply'] / rates['compile (scene drawn)']:,.1f}x a compile alone")
+              f"{rates['draw + apply'] / rates['compile (scene drawn)']:,.1f}x a compile alone "
+              f"({rates['draw + apply (full batches)'] / rates['compile (scene drawn)']:,.1f}x once every draw is a full batch)")
         print(f"  a reset draws {RESET_DRAW_AHEAD} scenes at a time, doubling to {RESET_DRAW_AHEAD_MAX}")
         ratio = rates.pop("step cost ratio", None)
         if ratio is not None:

@@ -309,7 +309,8 @@ def test_bench_resets_prints_each_way(capsys):
 
     assert main(["bench", "--resets", str(REPO / "specs" / "table_cube.prs"), "-n", "10"]) == 0
     out = capsys.readouterr().out
-    for row in ("apply (scene drawn)", "compile (scene drawn)", "draw + apply", "SyncVectorEnv x4 reset", "SceneEnv.step",
+    for row in ("apply (scene drawn)", "compile (scene drawn)", "draw + apply", "draw + apply (full batches)",
+                "once every draw is a full batch", "SyncVectorEnv x4 reset", "SceneEnv.step",
                 "mj_step(nstep=10)", "a SceneEnv step costs"):
         assert row in out
 
