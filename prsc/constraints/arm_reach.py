@@ -54,7 +54,7 @@ MARGIN = 0.003
 INNER_MARGIN = 0.005
 INNER_CHECK = 0.005  # m steps outwards from an inner end a controller's IK does not find
 # Beside the base the IK from home is ragged: between two rays whose inner ends it reaches it
-# may miss points farther out (the Panda: 34 of 1,252 points within 2 cm of the hole's edge at
+# may miss points farther out (the library's 7-joint arm: 34 of 1,252 points within 2 cm of the hole's edge at
 # its root's height, 0.19-0.23 m from its base). So the built ring's hole edge is checked, in
 # VERIFY_ANGLES directions at every height and VERIFY_BAND outwards from it, by the IK as a
 # controller runs it, and where a kept point is missed a ray is added there whose inner end lies

@@ -32,10 +32,13 @@ class PathCosts:
     @property
     def gibbs_pays(self) -> bool:
         """Whether Gibbs rounds cost less than candidate rounds by more than their exact law is worth."""
-        return self.candidates > EXACT_PREMIUM * self.gibbs
+        # pilots in which Gibbs rounds drew no proposal (a spec of one object) weigh nothing: candidate rounds stay
+        return self.gibbs > 0 and self.candidates > EXACT_PREMIUM * self.gibbs
 
     def describe(self) -> str:
         """How the two compare (what `prsc explain` prints in the path's reason)."""
+        if not self.gibbs:
+            return f"a scene costs about {self.candidates:.0f} box draws by candidates; Gibbs rounds drew no proposal"
         return (f"a scene costs about {self.candidates:.0f} box draws by candidates against {self.gibbs:.0f} by Gibbs "
                 f"rounds ({self.candidates / self.gibbs:.1f}x; candidate rounds, exact, are kept up to {EXACT_PREMIUM:g}x)")
 

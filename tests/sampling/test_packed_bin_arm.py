@@ -59,6 +59,10 @@ def test_the_costs_weigh_the_scenes_no_candidate_passes():
     costly = path_costs(Pilot(scenes=8, passed=4, drawn=4 * 300 + 4 * 468, size=468), objects=12, gibbs_rows=8 * 1200,
                         gibbs_scenes=8)
     assert costly.gibbs_pays and costly.candidates > EXACT_PREMIUM * costly.gibbs
+    # Pilots in which Gibbs rounds drew no proposal (one object with a random mass) weigh nothing: candidate
+    # rounds stay, and the reason reads (it divided by zero, an internal error of `prsc compile`).
+    none = path_costs(Pilot(scenes=8, passed=8, drawn=8, size=468), objects=1, gibbs_rows=0, gibbs_scenes=8)
+    assert not none.gibbs_pays and "Gibbs rounds drew no proposal" in none.describe()
 
 
 def test_the_parts_beside_the_arm_follow_the_rejection_reference_and_hold_the_spec():
