@@ -74,6 +74,17 @@ SLOW = (
     "tests/sampling/test_engine.py::test_baseline_counts_rejections_by_cause_and_exact_rejects_nothing",
     "tests/api/test_resets.py::test_the_domain_randomisation_example_runs_as_written",
     "tests/assets/test_articulated_objects.py::test_every_format_carries_the_cabinet[cabinet.urdf]",
+    # Made room for the reach ring's hole check (recipe v12: about 13 CPU s more per ring build), task
+    # relations on links and packed-bin plans (2026-11-27): each has a sibling in `make test` (the 7-reset
+    # renderer check beside the kept-context one, the bench's other rows, the other example specs).
+    "tests/api/test_renderer_reuse.py::test_a_renderer_kept_across_resets_renders_what_a_fresh_one_does[7]",
+    "tests/sampling/test_candidates.py::test_a_carried_region_tested_against_a_reach_ring_follows_the_gibbs_sweeps",
+    "tests/runner/test_user_loop.py::test_the_docs_loop_runs_the_handover_in_a_fresh_shell",
+    "tests/api/test_resets.py::test_bench_resets_prints_each_way",
+    "tests/specs/test_example_specs.py::test_the_example_compiles_to_every_format_and_ten_scenes_settle[kitchen_shelf]",
+    "tests/runner/test_datasets.py::test_two_jobs_write_the_same_dataset",
+    "tests/cli/test_check_fuzz.py::test_mutants_exit_cleanly",
+    "tests/backends/test_furniture_stack_view_specs.py::test_the_fourth_cube_is_at_least_10_cm_from_every_cube_of_the_stack",
 )
 
 
