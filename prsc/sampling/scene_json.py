@@ -177,8 +177,7 @@ def _object_json(obj: ObjectValue) -> dict[str, Any]:
         problem = size_problem(float(value))
         if problem:
             raise PrscError(f"{prop} of {obj.name} {problem}")
-    mass = props.get("mass")
-    mass = DENSITY * w * l * h if mass is None else float(mass)
+    mass = object_mass(obj.dims, props.get("mass"))
     problem = mass_problem(mass)
     if problem:
         raise PrscError(f"mass of {obj.name} {problem}")
@@ -258,7 +257,7 @@ class SizedTemplate:
         """The object's JSON (object_json's, with its errors where its size or mass is not valid)."""
         assert obj.position is not None and obj.rotation is not None and obj.dims is not None
         w, l, h = obj.dims
-        mass = DENSITY * w * l * h if self.mass_from_size else self.template["mass"]
+        mass = object_mass(obj.dims, None if self.mass_from_size else self.template["mass"])
         if any(size_problem(float(v)) for v in obj.dims) or mass_problem(mass):
             return object_json(obj)
         out = placed_template(self.template, obj.position.tolist(), quaternion_wxyz(obj.rotation))
@@ -276,6 +275,12 @@ def sized_template(name: str, class_name: str, props: dict[str, Any], span: Span
         return SizedTemplate(object_template(name, class_name, stand_in, span), "mass" not in props)
     except PrscError:
         return None
+
+
+def object_mass(dims, given: Any) -> float:
+    """An object's mass: the one given, else DENSITY times the volume of its box."""
+    w, l, h = dims
+    return DENSITY * w * l * h if given is None else float(given)
 
 
 def _from_template(template: dict[str, Any], obj: ObjectValue) -> dict[str, Any]:
