@@ -51,6 +51,7 @@ from prsc.backends.scene import (Scene, object_dimensions, object_mass, parse_ob
 from prsc.backends.scene_structure import SceneStructure, difference, scene_structure
 from prsc.backends.store import AssetStore
 from prsc.errors import PrscError
+from prsc.limits import MAX_MASS, MAX_SIZE, MIN_SIZE
 
 
 def _signature(raw: Mapping[str, Any]) -> dict[str, Any]:
@@ -82,6 +83,25 @@ def _bounds(shape: str, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if shape == "cylinder":
         return np.hypot(radius, sizes[:, 1]), np.stack([radius, radius, sizes[:, 1]], axis=1)
     return radius.copy(), np.stack([radius, radius, radius], axis=1)
+
+
+def _sizes_at_once(objects: list[Any], resized: Iterable[int], free: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The `resized` objects' dimensions (rows) and masses when every one is valid as the scene parser
+    checks them (`object_dimensions`, `object_mass`), tested all at once; None when one may not be."""
+    try:
+        raws = [objects[k] for k in resized]
+        dims, masses = [raw["dimensions"] for raw in raws], [raw["mass"] for raw in raws]
+        exact = ({type(d) for d in dims} <= {list, tuple} and {type(v) for v in chain(masses, *dims)} <= {float, int})
+        dimensions, mass = np.array(dims, dtype=float), np.array(masses, dtype=float)
+    except (KeyError, TypeError, ValueError):
+        return None
+    if not exact or dimensions.shape != (len(raws), 3):
+        return None
+    # limits.size_problem and mass_problem, with NaN failing every comparison.
+    fits = ((dimensions >= MIN_SIZE) & (dimensions <= MAX_SIZE)).all() and ((mass >= 0.0) & (mass <= MAX_MASS)).all()
+    if not fits or (free[list(resized)] & (mass == 0.0)).any():
+        return None
+    return dimensions, mass
 
 
 def _image_name(raw: Mapping[str, Any]) -> Any:
@@ -167,6 +187,7 @@ class SharedModel:
         # Per object, the primitive that is all of it (sizes and masses written by `_write_primitives`), or None.
         self._shapes: list[str | None] = [primitive_shape(b.obj) for b in bodies]
         self._primitive_ids: dict[int, tuple[int, int]] = {}  # object -> (its body, its geom), once looked up
+        self._groups: dict[tuple[int, ...], list[tuple[str, np.ndarray, np.ndarray]]] = {}  # `_primitive_groups`
         self._signatures: list[dict[str, Any]] | None = None  # of the scene applied last: all but poses and images
         self._image_names: list[Any] = []  # of the scene applied last, per object
         self._params: Any = None
@@ -284,10 +305,13 @@ class SharedModel:
 
     def _resize(self, objects: list[Any], resized: Mapping[int, dict[str, Any]]) -> None:
         """Validate and write the new dimensions and mass of primitives whose JSON changed in nothing else."""
-        where = [f"object {objects[k].get('name')!r}" for k in resized]
-        dimensions = np.array([object_dimensions(objects[k].get("dimensions"), w) for k, w in zip(resized, where)])
-        masses = np.array([object_mass(objects[k].get("mass"), w, free=not self._bodies[k].fixed)
-                           for k, w in zip(resized, where)])
+        numbers = _sizes_at_once(objects, resized, self._free)
+        if numbers is None:  # one by one, for the scene parser's message
+            where = [f"object {objects[k].get('name')!r}" for k in resized]
+            numbers = (np.array([object_dimensions(objects[k].get("dimensions"), w) for k, w in zip(resized, where)]),
+                       np.array([object_mass(objects[k].get("mass"), w, free=not self._bodies[k].fixed)
+                                 for k, w in zip(resized, where)]))
+        dimensions, masses = numbers
         # Its Body keeps the numbers it was resolved with: of a primitive's Body only its name and structure are read.
         self._write_primitives(list(resized), dimensions, masses)
         for k, signature in resized.items():
@@ -297,10 +321,7 @@ class SharedModel:
         """Geom size and bounds, body mass and inertia of primitive `objects` of `dimensions` and `masses`
         (rows), all of one shape at once (their geoms' pose, centre of mass and axes are the body's)."""
         model = self.model
-        shapes = [self._shapes[k] for k in objects]
-        for shape in dict.fromkeys(shapes):
-            rows = [i for i, s in enumerate(shapes) if s == shape]
-            ids = np.array([self._primitive_id(objects[i]) for i in rows], dtype=int).reshape(-1, 2)
+        for shape, rows, ids in self._primitive_groups(tuple(objects)):
             extents = primitive_extents(shape, dimensions[rows])
             sizes = primitive_geom_sizes(shape, extents)
             geoms, bodies = ids[:, 1], ids[:, 0]
@@ -311,6 +332,19 @@ class SharedModel:
             model.geom_aabb[geoms, 3:] = half
             model.body_mass[bodies] = masses[rows]
             model.body_inertia[bodies] = primitive_inertia(shape, extents, masses[rows])
+
+    def _primitive_groups(self, objects: tuple[int, ...]) -> list[tuple[str, np.ndarray, np.ndarray]]:
+        """Primitive `objects` by shape: (shape, their rows in `objects`, their (body, geom) ids), once per set
+        of objects (a reset loop writes the same objects every scene)."""
+        groups = self._groups.get(objects)
+        if groups is None:
+            shapes = [self._shapes[k] for k in objects]
+            groups = self._groups[objects] = []
+            for shape in dict.fromkeys(shapes):
+                rows = [i for i, s in enumerate(shapes) if s == shape]
+                ids = np.array([self._primitive_id(objects[i]) for i in rows], dtype=int).reshape(-1, 2)
+                groups.append((shape, np.array(rows, dtype=int), ids))  # type: ignore[arg-type]
+        return groups
 
     def _primitive_id(self, k: int) -> tuple[int, int]:
         """The body and geom of primitive object `k`."""

@@ -251,8 +251,10 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
         return region.sampler.points(u) + state.positions[region.anchor], valid
     # A rectangle on the carrier's face or floor, in its frame (specifiers.rows_on's rows).
     pos, rot = state.positions[region.anchor], state.rotations[region.anchor]
-    if rot.strides[0] == 0 and np.array_equal(rot[0], _EYE):  # an unrotated carrier, the same for all: no products
-        s = (np.abs(state.rotations[name]) * (state.dims[name] * 0.5)[:, None, :]).sum(axis=2)  # support's, exactly
+    unrotated = rot.strides[0] == 0 and np.array_equal(rot[0], _EYE)  # the same for all: no products
+    if unrotated:
+        terms = np.abs(state.rotations[name]) * (state.dims[name] * 0.5)[:, None, :]
+        s = terms[:, :, 0] + terms[:, :, 1] + terms[:, :, 2]  # support's, exactly (sum(axis=2)'s order, 3x faster)
     else:
         s = support(np.swapaxes(rot, 1, 2), state.rotations[name], state.dims[name] * 0.5)  # along its x, y, up
     hx, hy = np.full(n, region.half_size[0]), np.full(n, region.half_size[1])
@@ -269,6 +271,12 @@ def _draw(region: Region, name: str, state: CandidateState, u: np.ndarray) -> tu
         x, y, valid = xy[:, 0], xy[:, 1], valid & inside
     else:
         x, y = (2.0 * u[:, 0] - 1.0) * hx, (2.0 * u[:, 1] - 1.0) * hy
+    if unrotated:  # the products below with the identity's columns: adding their zeros changes no bit
+        point = np.array(np.broadcast_to(pos, (n, 3)))
+        point[:, 0] += x
+        point[:, 1] += y
+        point[:, 2] += lift
+        return point, valid
     return pos + x[:, None] * rot[:, :, 0] + y[:, None] * rot[:, :, 1] + lift[:, None] * rot[:, :, 2], valid
 
 

@@ -12,6 +12,8 @@ scenes share the call. docs/sampling.md, "Batched sampling", gives its statistic
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
@@ -59,6 +61,16 @@ def scene_keys(seed: int, indices: np.ndarray) -> np.ndarray:
     return _mix(keys)
 
 
+@functools.lru_cache(maxsize=4096)
+def _site_counters(site: int, width: int) -> np.ndarray:
+    """The mixed counters of a draw site's first `width` uniforms (read-only): the same for every scene,
+    so a Gibbs round's many small draws from one site mix them once."""
+    counters = (np.uint64(site) * np.uint64(SITE_WIDTH) + np.arange(width, dtype=np.uint64)) * _GOLDEN + _GOLDEN
+    _mix(counters)
+    counters.flags.writeable = False
+    return counters
+
+
 def uniforms(keys: np.ndarray, site: int, width: int) -> np.ndarray:
     """`width` uniforms in [0, 1) of draw site `site` per scene key: shape (len(keys), width)."""
     if not 0 <= width <= SITE_WIDTH:
@@ -67,9 +79,8 @@ def uniforms(keys: np.ndarray, site: int, width: int) -> np.ndarray:
         key = int(keys[0])
         first = (site * SITE_WIDTH) * _G + _G
         return np.array([[_unit(key, first + j * _G) for j in range(width)]])
-    counters = (np.uint64(site) * np.uint64(SITE_WIDTH) + np.arange(width, dtype=np.uint64)) * _GOLDEN + _GOLDEN
     with np.errstate(over="ignore"):
-        z = keys[:, None] ^ _mix(counters)[None, :]
+        z = keys[:, None] ^ _site_counters(site, width)[None, :]
         z *= _GOLDEN
         _mix(z)
     return (z >> _S11).astype(np.float64) * _UNIT

@@ -51,7 +51,7 @@ from prsc.sampling.drawn_hits import Partners, drawn_hits
 from prsc.sampling.engine import SceneResult
 from prsc.sampling.group_members import SWEEPS, GroupObject
 from prsc.sampling.runtime import ObjectRuntime, evaluate_params
-from prsc.sampling.seeds import scene_rng
+from prsc.sampling.seeds import LazySceneRng
 from prsc.sampling.stats import RejectionStats
 
 PROPOSALS = (32, 480)  # uniform proposals per draw, in two blocks, before the exact free space
@@ -372,7 +372,7 @@ class GroupGibbs:
         draws = [[(draw_id, values[:, 0].tolist()) for draw_id, values in d.items()] for d in boxes.draws]
         out = []
         for i, index in enumerate(indices):
-            ctx = SceneContext(scene_rng(seed, index))
+            ctx = SceneContext(LazySceneRng(seed, index))  # type: ignore[arg-type]
             objects = []
             for k, (obj, rt) in enumerate(zip(self.objects, self.runtimes)):
                 plan = rt.plan
