@@ -8,6 +8,7 @@ gets a `_` before it), made unique among the scene's names with a numeric suffix
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Sequence
 
@@ -44,8 +45,14 @@ def element_names(names: Sequence[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
+@functools.lru_cache(maxsize=64)
+def _element_names(names: tuple[str, ...]) -> tuple[str, ...]:
+    """`element_names`, once per set of names (every scene of a spec has the same: a reset loop asks often)."""
+    return element_names(names)
+
+
 def with_body_names(scene: dict) -> dict:
     """A copy of a scene JSON whose objects carry `body`: their element name in the compiled files."""
     objects = scene.get("objects", [])
-    names = element_names([o["name"] for o in objects])
+    names = _element_names(tuple(o["name"] for o in objects))
     return {**scene, "objects": [{**o, "body": body} for o, body in zip(objects, names)]}
