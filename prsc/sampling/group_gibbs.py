@@ -31,8 +31,9 @@ The law is the Gibbs sampler's: the joint law as far as `SWEEPS` sweeps mix.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -123,13 +124,15 @@ class GroupGibbs:
 
     def draw(self, seed: int, indices: Sequence[int]) -> list[SceneResult]:
         """Scenes `indices` of `seed`."""
-        out: list[SceneResult] = []
-        for first in range(0, len(indices), self.chunk):
-            out += self._chunk(seed, [int(i) for i in indices[first:first + self.chunk]])
-        return out
+        return [make() for make in self.draw_lazily(seed, indices)]
 
-    def _chunk(self, seed: int, indices: list[int]) -> list[SceneResult]:
-        return self._results(self._sweep(seed, indices), seed, indices)
+    def draw_lazily(self, seed: int, indices: Sequence[int]) -> list[Callable[[], SceneResult]]:
+        """Scenes `indices` of `seed`, each made when called (a drawer holds numbers, not objects for the GC to walk)."""
+        out: list[Callable[[], SceneResult]] = []
+        for first in range(0, len(indices), self.chunk):
+            chunk = [int(i) for i in indices[first:first + self.chunk]]
+            out += self._results(self._sweep(seed, chunk), seed, chunk)
+        return out
 
     def pilot_rows(self, seed: int, indices: Sequence[int]) -> int:
         """Proposals scenes `indices` of `seed` draw, start and sweeps (sampler_plan's cost of Gibbs rounds)."""
@@ -364,32 +367,34 @@ class GroupGibbs:
                                                   theirs[0], theirs[1], mine[2] + theirs[2], obj.upright and other.upright)
         return hit if live is None else hit & live
 
-    def _results(self, boxes: _Boxes, seed: int, indices: list[int]) -> list[SceneResult]:
-        """The chunk's scenes as the sequential sampler returns them (properties from each scene's own Generator,
-        a drawn box's size and yaw from the draws it kept)."""
+    def _results(self, boxes: _Boxes, seed: int, indices: list[int]) -> list[Callable[[], SceneResult]]:
+        """What makes each of the chunk's scenes as the sequential sampler returns it: its numbers as lists."""
         positions = [p.tolist() for p in boxes.positions]
         dims = [(2.0 * h).tolist() if own else None for h, own in zip(boxes.halves, boxes.per_scene)]
         draws = [[(draw_id, values[:, 0].tolist()) for draw_id, values in d.items()] for d in boxes.draws]
-        out = []
-        for i, index in enumerate(indices):
-            ctx = SceneContext(LazySceneRng(seed, index))  # type: ignore[arg-type]
-            objects = []
-            for k, (obj, rt) in enumerate(zip(self.objects, self.runtimes)):
-                plan = rt.plan
-                props = dict(plan.static_props)
-                if obj.drawn is None:
-                    rotation, size = obj.rotation, rt.dims
-                else:
-                    rotation, size = boxes.rotations[k][i].copy(), tuple(dims[k][i])  # type: ignore[index]
-                    props.update(zip(DIMENSIONS, size))
-                    for draw_id, values in draws[k]:
-                        ctx.draws[draw_id] = values[i]
-                value = ObjectValue(plan.name, plan.class_name, plan.span, np.array(positions[k][i]), rotation, size,
-                                    props, plan.property_fns)
-                ctx.objects[plan.name] = value
-                objects.append(value)
-            ctx.level = len(objects)
-            for rt, value in zip(self.runtimes, objects):
-                rt.finish(value, ctx)
-            out.append(SceneResult(objects, evaluate_params(self.cprog, ctx), RejectionStats(scenes=1), ctx))
-        return out
+        return [functools.partial(self._result, boxes.rotations, positions, dims, draws, seed, index, i)
+                for i, index in enumerate(indices)]
+
+    def _result(self, rotations: list[np.ndarray], positions: list[list], dims: list[list | None], draws: list[list],
+                seed: int, index: int, i: int) -> SceneResult:
+        """Scene i of a chunk (properties from its own Generator, a drawn box's size and yaw from the draws it kept)."""
+        ctx = SceneContext(LazySceneRng(seed, index))  # type: ignore[arg-type]
+        objects = []
+        for k, (obj, rt) in enumerate(zip(self.objects, self.runtimes)):
+            plan = rt.plan
+            props = dict(plan.static_props)
+            if obj.drawn is None:
+                rotation, size = obj.rotation, rt.dims
+            else:
+                rotation, size = rotations[k][i].copy(), tuple(dims[k][i])  # type: ignore[index]
+                props.update(zip(DIMENSIONS, size))
+                for draw_id, values in draws[k]:
+                    ctx.draws[draw_id] = values[i]
+            value = ObjectValue(plan.name, plan.class_name, plan.span, np.array(positions[k][i]), rotation, size,
+                                props, plan.property_fns)
+            ctx.objects[plan.name] = value
+            objects.append(value)
+        ctx.level = len(objects)
+        for rt, value in zip(self.runtimes, objects):
+            rt.finish(value, ctx)
+        return SceneResult(objects, evaluate_params(self.cprog, ctx), RejectionStats(scenes=1), ctx)

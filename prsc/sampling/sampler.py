@@ -225,7 +225,7 @@ class Sampler:
         path = self.plan.path
         if path != BATCHED and not self.plan.chunked:
             return functools.partial(self.scene, seed)
-        drawn: dict[int, Any] = {}  # index -> how to make its scene JSON (batched), or a candidate round's Drawn
+        drawn: dict[int, Any] = {}  # index -> what makes its scene JSON or result (batched, Gibbs rounds), or a Drawn
         size = [ahead]  # how many the next draw takes
 
         def scene(index: int) -> dict[str, Any]:
@@ -245,9 +245,14 @@ class Sampler:
                 elif path == CANDIDATE_ROUNDS:
                     assert self._candidates is not None
                     drawn.update(zip(chunk, self._candidates.draw(seed, chunk)))
+                elif path == GIBBS_ROUNDS:
+                    assert self._group is not None
+                    drawn.update(zip(chunk, self._group.draw_lazily(seed, chunk)))
                 else:
                     drawn.update(zip(chunk, self.results(seed, chunk)))
             value = drawn.pop(index)
+            if path == GIBBS_ROUNDS:
+                return self.to_json(value(), seed, index)
             return value() if path == BATCHED else self.to_json(self._settle(value, seed, index), seed, index)
 
         return scene

@@ -172,8 +172,9 @@ def test_a_growing_drawer_takes_twice_the_last_draw_and_gives_the_same_scenes(mo
     sampler = Sampler(compile_program(str(REPO / "specs" / "bin_ten_parts.prs")), "exact")
     scenes = sampler.batch(7, range(40))
     draws: list[int] = []
-    results = sampler.results
-    monkeypatch.setattr(sampler, "results", lambda seed, chunk: draws.append(len(chunk)) or results(seed, chunk))
+    group = sampler._group  # the drawer takes Gibbs rounds' scenes as it hands them out, each made when asked for
+    lazily = group.draw_lazily
+    monkeypatch.setattr(group, "draw_lazily", lambda seed, chunk: draws.append(len(chunk)) or lazily(seed, chunk))
     drawer = sampler.drawer(7, 2, grow_to=8)
     assert [drawer(k) for k in range(30)] == scenes[:30]
     assert draws == [2, 4, 8, 8, 8]
