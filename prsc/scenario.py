@@ -20,8 +20,9 @@ if TYPE_CHECKING:
 RESET_DRAW_AHEAD = 64
 """A reset loop's first draw (SceneEnv's `draw_ahead`): a seeded reset redraws this many scenes. Where
 the spec draws by Gibbs rounds, numpy calls per round cost most: 64 scenes cost 1.8x 16 (90 against
-49 ms on specs/bin_ten_parts.prs), so a loop of 100 to 4,000 resets costs 4-13 % less from 64 than
-from 16 (docs/learning.md, "Measured"); a loop that reseeds every episode may pass 16 or less."""
+49 ms on specs/bin_ten_parts.prs), so a loop's draws cost 4-13 % less from 64 than from 16 over
+10 to 4,000 resets (docs/learning.md, "Packed resets, cut again"); a loop that reseeds every
+episode may pass 16 or less."""
 RESET_DRAW_AHEAD_MAX = 256
 """Where a reset loop's draws stop doubling (SceneEnv's `draw_ahead_max`): the steady batch."""
 

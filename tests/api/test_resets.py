@@ -112,6 +112,34 @@ def test_apply_writes_new_sizes_of_primitives_without_parsing_them(monkeypatch):
     scenario.apply(scenario.scene(0, 4), model, data)
 
 
+BAD_SIZES = (("dimensions", [0.05, float("nan"), 0.006]), ("dimensions", [0.05, True, 0.006]), ("dimensions", [0.05, 0.05]),
+             ("dimensions", [0.05, 0.05, 2e6]), ("dimensions", [0.05, 0.05, 1e-7]), ("dimensions", "0.05"),
+             ("mass", 0.0), ("mass", -1.0), ("mass", [0.1]), ("mass", "0.1"), ("mass", float("inf")), ("mass", None))
+
+
+def test_every_bad_size_or_mass_is_refused_with_the_scene_parser_s_message():
+    # apply checks a reset's new sizes and masses all at once; whatever that check refuses is read again
+    # object by object, so each refusal is the parser's own.
+    from prsc.backends.scene import parse_scene
+
+    scenario = Scenario(compile_sampler(REPO / "specs" / "bin_ten_parts.prs", law="sequential"))
+    model = scenario.model()
+    data = mujoco.MjData(model)
+    scenario.apply(scenario.scene(0, 1), model, data)
+    for key, value in BAD_SIZES:
+        bad = copy.deepcopy(scenario.scene(0, 2))
+        bad["objects"][2][key] = value
+        with pytest.raises(PrscError) as refusal:
+            scenario.apply(bad, model, data)
+        with pytest.raises(PrscError) as parsed:
+            parse_scene(bad)
+        assert refusal.value.message == parsed.value.message, (key, value)
+    fine = copy.deepcopy(scenario.scene(0, 2))
+    fine["objects"][2]["dimensions"] = tuple(fine["objects"][2]["dimensions"])  # a tuple is a list to the parser
+    scenario.apply(fine, model, data)
+    assert np.array_equal(model.geom_size, prsc.mujoco_model(scenario.scene(0, 2)).geom_size)
+
+
 @pytest.mark.parametrize("pose, message", [
     (("quaternion", [1.0, 0.0, 0.0, 0.5]), "expected a unit quaternion"),
     (("position", [0.1, True, 0.8]), "expected finite numbers"),
