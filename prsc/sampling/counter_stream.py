@@ -61,12 +61,19 @@ def scene_keys(seed: int, indices: np.ndarray) -> np.ndarray:
     return _mix(keys)
 
 
+_CACHED_WIDTH = 64  # sites this narrow keep their mixed counters (4,096 of them: at most 2 MiB)
+
+
+def _mixed_counters(site: int, width: int) -> np.ndarray:
+    """The mixed counters of a draw site's first `width` uniforms: the same for every scene."""
+    counters = (np.uint64(site) * np.uint64(SITE_WIDTH) + np.arange(width, dtype=np.uint64)) * _GOLDEN + _GOLDEN
+    return _mix(counters)
+
+
 @functools.lru_cache(maxsize=4096)
 def _site_counters(site: int, width: int) -> np.ndarray:
-    """The mixed counters of a draw site's first `width` uniforms (read-only): the same for every scene,
-    so a Gibbs round's many small draws from one site mix them once."""
-    counters = (np.uint64(site) * np.uint64(SITE_WIDTH) + np.arange(width, dtype=np.uint64)) * _GOLDEN + _GOLDEN
-    _mix(counters)
+    """`_mixed_counters`, read-only and kept: a Gibbs round's many small draws from one site mix them once."""
+    counters = _mixed_counters(site, width)
     counters.flags.writeable = False
     return counters
 
@@ -80,7 +87,8 @@ def uniforms(keys: np.ndarray, site: int, width: int) -> np.ndarray:
         first = (site * SITE_WIDTH) * _G + _G
         return np.array([[_unit(key, first + j * _G) for j in range(width)]])
     with np.errstate(over="ignore"):
-        z = keys[:, None] ^ _site_counters(site, width)[None, :]
+        counters = _site_counters(site, width) if width <= _CACHED_WIDTH else _mixed_counters(site, width)
+        z = keys[:, None] ^ counters[None, :]
         z *= _GOLDEN
         _mix(z)
     return (z >> _S11).astype(np.float64) * _UNIT
