@@ -60,7 +60,7 @@ class MjWorld:
                 continue  # a camera or a light: no body
             self.body[obj["name"]] = body
             bodies = _subtree(model, body)
-            if len(bodies) > 1 and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
+            if _mounted_robot(task, obj["name"]) and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
                 # A mounted robot touches with its moving links: its base rests where it was placed.
                 bodies = [b for b in bodies if model.body_weldid[b] != 0]
             self.geoms[obj["name"]] = np.flatnonzero(collides & np.isin(model.geom_bodyid, bodies))
@@ -279,6 +279,13 @@ _STILL.flags.writeable = False
 
 def _has(task: Task, name: str) -> bool:
     return any(o.name == name for o in task.objects)
+
+
+def _mounted_robot(task: Task, name: str) -> bool:
+    """Whether a fixed articulated object touches with its moving links only: a robot does (its base
+    rests where it was placed), furniture does not (a cabinet's carcass is touched too)."""
+    robot = task.object(name).robot if _has(task, name) else None
+    return robot is None or robot  # a task file without the flag: as it was read then
 
 
 class TaskMonitor:
