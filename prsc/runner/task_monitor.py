@@ -282,10 +282,8 @@ def _has(task: Task, name: str) -> bool:
 
 
 def _mounted_robot(task: Task, name: str) -> bool:
-    """Whether a fixed articulated object touches with its moving links only: a robot does (its base
-    rests where it was placed), furniture does not (a cabinet's carcass is touched too)."""
-    robot = task.object(name).robot if _has(task, name) else None
-    return robot is None or robot  # a task file without the flag: as it was read then
+    """Whether a fixed articulated object touches with its moving links only (TaskObject.touches_by_moving_links)."""
+    return not _has(task, name) or task.object(name).touches_by_moving_links
 
 
 class TaskMonitor:

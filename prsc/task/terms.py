@@ -178,6 +178,12 @@ class TaskObject:
     # the flag, read as then (every fixed articulated object by its moving links).
     robot: bool | None = False
 
+    @property
+    def touches_by_moving_links(self) -> bool:
+        """Whether, fixed and articulated, it touches with its moving links only: a robot does (its base
+        rests where it was placed), furniture does not; a task file without the flag, as it was read then."""
+        return self.robot is not False
+
 
 @dataclass(frozen=True)
 class Task:
