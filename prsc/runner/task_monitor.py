@@ -20,6 +20,8 @@ __all__ = ["TaskMonitor", "TaskStatus", "CONTROL_PERIOD"]
 
 _geom_distance = mujoco.mj_geomDistance
 _object_velocity = mujoco.mj_objectVelocity
+_set_state, _kinematics = mujoco.mj_setState, mujoco.mj_kinematics
+_com_positions, _com_velocities = mujoco.mj_comPos, mujoco.mj_comVel
 _BODY = mujoco.mjtObj.mjOBJ_BODY
 CONTROL_PERIOD = 0.02  # s of simulated time between two evaluations of the task (50 Hz)
 LOGGED_STATES = 50  # states TaskMonitor.log keeps before evaluating them (1 s of control steps)
@@ -58,7 +60,7 @@ class MjWorld:
                 continue  # a camera or a light: no body
             self.body[obj["name"]] = body
             bodies = _subtree(model, body)
-            if len(bodies) > 1 and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
+            if _mounted_robot(task, obj["name"]) and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
                 # A mounted robot touches with its moving links: its base rests where it was placed.
                 bodies = [b for b in bodies if model.body_weldid[b] != 0]
             self.geoms[obj["name"]] = np.flatnonzero(collides & np.isin(model.geom_bodyid, bodies))
@@ -84,8 +86,8 @@ class MjWorld:
         self._moving = ~(welded & (model.body_mocapid[model.geom_bodyid] < 0))
         self._fromto = np.zeros(6)
         self._pair_geoms: dict[tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
-        self._nearest: dict[tuple[str, str], tuple[int, int]] = {}  # each pair's nearest geoms at the last state
-        self._nearest_row: dict[tuple[str, str], int] = {}  # their row among a batch pair's (from its first)
+        # each pair's nearest geoms at the last state, and their row among a batch pair's (from its first)
+        self._nearest: dict[tuple[str, str], tuple[int, int, int]] = {}
         self.prepare(())
 
     def prepare(self, pairs) -> None:
@@ -94,6 +96,9 @@ class MjWorld:
         parts = [self._pairs_of(a, b) for a, b in self._batch]
         self._batch_a = np.concatenate([p[0] for p in parts]) if parts else np.zeros(0, int)
         self._batch_b = np.concatenate([p[1] for p in parts]) if parts else np.zeros(0, int)
+        # the batch's geoms once each, and each row's two among them (the broad phase gathers fewer positions)
+        self._batch_geoms, local = np.unique(np.concatenate([self._batch_a, self._batch_b]), return_inverse=True)
+        self._batch_local = (local[:len(self._batch_a)], local[len(self._batch_a):])
         bounds = np.cumsum([0] + [len(p[0]) for p in parts]).tolist()
         self._batch_rows = {pair: (first, last) for pair, first, last in zip(self._batch, bounds[:-1], bounds[1:])}
         self._batch_boxes = None  # placed at the first state (place)
@@ -107,7 +112,8 @@ class MjWorld:
         centres, halves = self._boxes(data)
         a, b, position = self._batch_a, self._batch_b, data.geom_xpos
         shift = (centres[a] - position[a]) - (centres[b] - position[b])
-        self._batch_boxes = (shift, halves[a] + halves[b])
+        # by axis first, (3, rows): the broad phase's arrays are then contiguous per axis
+        self._batch_boxes = (np.ascontiguousarray(shift.T)[:, None, :], np.ascontiguousarray((halves[a] + halves[b]).T)[:, None, :])
 
     def _pairs_of(self, a: str, b: str) -> tuple[np.ndarray, np.ndarray]:
         """Every (geom of a, geom of b), flattened."""
@@ -132,7 +138,15 @@ class MjWorld:
         """Squared broad-phase bounds of every batch row (geom pair) given the geoms' `positions`
         (ngeom, 3) in one state, or (states, ngeom, 3) in several states of the episode (after place)."""
         shift, halves = self._batch_boxes
-        return _squared_box_gaps(positions[..., self._batch_a, :] - positions[..., self._batch_b, :] + shift, halves)
+        states = positions if positions.ndim == 3 else positions[None]
+        by_axis = states[:, self._batch_geoms, :].transpose(2, 0, 1)  # (3, states, the batch's geoms)
+        first, second = self._batch_local
+        gaps = np.abs(by_axis[:, :, first] - by_axis[:, :, second] + shift)
+        gaps -= halves
+        np.maximum(gaps, 0.0, out=gaps)
+        gaps *= gaps
+        lower2 = gaps[0] + gaps[1] + gaps[2]
+        return lower2 if positions.ndim == 3 else lower2[0]
 
     def least_bounds(self, lower2: np.ndarray) -> list[dict[tuple[str, str], tuple[float, int, float]]]:
         """Per state (row of `lower2`, batch_lower_bounds of several states): each batch pair's least
@@ -209,19 +223,20 @@ class StateDistances:
         found = self.exact.get(pair)
         if found is not None:
             return found
-        world, model, data = self.world, self.world.model, self.data
+        world, data = self.world, self.data
         nearest = world._nearest.get(pair)
         best = DISTANCE_CAP
         if nearest is not None:
-            best = min(best, _geom_distance(model, data, nearest[0], nearest[1], DISTANCE_CAP, world._fromto))
+            # at most DISTANCE_CAP: mj_geomDistance returns its limit for geoms further apart
+            best = _geom_distance(world.model, data, nearest[0], nearest[1], DISTANCE_CAP, world._fromto)
             if enough is not None and best <= enough:
                 return best  # the caller's answer does not depend on how much nearer the geoms are
         least = None if self._least is None else self._least.get(pair)
         if least is not None and best > 0.0:
             low, row, other = least
-            if best * best <= (other if nearest is not None and row == world._nearest_row[pair] else low):
+            if best * best <= (other if nearest is not None and row == nearest[2] else low):
                 # no pair but the nearest one has a bound under its distance: the loop below would compute none
-                self.exact[pair] = best = float(best)
+                self.exact[pair] = best
                 return best
         rows = world._batch_rows.get(pair)
         if rows is None:  # a pair the task did not announce (prepare): its own broad phase
@@ -241,11 +256,11 @@ class StateDistances:
                                                            ib[candidates].tolist(), candidates.tolist())):
                     if low2 >= best * best:
                         break
-                    if (first, second) == nearest:
+                    if nearest is not None and first == nearest[0] and second == nearest[1]:
                         continue
-                    d = _geom_distance(model, data, first, second, best, world._fromto)
+                    d = _geom_distance(world.model, data, first, second, best, world._fromto)
                     if d < best:
-                        best, world._nearest[pair], world._nearest_row[pair] = d, (first, second), row
+                        best, world._nearest[pair] = d, (first, second, row)
         self.exact[pair] = best = float(best)
         return best
 
@@ -264,6 +279,11 @@ _STILL.flags.writeable = False
 
 def _has(task: Task, name: str) -> bool:
     return any(o.name == name for o in task.objects)
+
+
+def _mounted_robot(task: Task, name: str) -> bool:
+    """Whether a fixed articulated object touches with its moving links only (TaskObject.touches_by_moving_links)."""
+    return not _has(task, name) or task.object(name).touches_by_moving_links
 
 
 class TaskMonitor:
@@ -310,14 +330,17 @@ class TaskMonitor:
         if self._replay is None:
             self._replay = mujoco.MjData(self.model)
         model, replay, rows = self.model, self._replay, self._logged[:self._count]
-        lower2 = self.world.batch_lower_bounds(self._positions[:self._count])
-        for row, bounds, least in zip(rows, lower2, self.world.least_bounds(lower2)):
-            mujoco.mj_setState(model, replay, row, _LOGGED)
-            # what the task reads: body and geom poses, centres of mass and velocities
-            mujoco.mj_kinematics(model, replay)
-            mujoco.mj_comPos(model, replay)
-            mujoco.mj_comVel(model, replay)
-            self.latest = self.monitor.update(self.state(model, replay, bounds, least))
+        world, moving, update = self.world, self.moving, self.monitor.update
+        lower2 = world.batch_lower_bounds(self._positions[:self._count])
+        for row, bounds, least in zip(rows, lower2, world.least_bounds(lower2)):
+            _set_state(model, replay, row, _LOGGED)
+            # what the task reads: body and geom poses, and the velocities (centres of mass first) when it reads any
+            _kinematics(model, replay)
+            if moving:
+                _com_positions(model, replay)
+                _com_velocities(model, replay)
+            self.latest = update(WorldState(replay.time, _LazyPoses(world, replay, moving),
+                                            StateDistances(world, replay, bounds, least)))
         self._count = 0
 
     def state(self, model: mujoco.MjModel, data: mujoco.MjData, lower2: np.ndarray | None = None,

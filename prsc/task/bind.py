@@ -17,6 +17,10 @@ FINGERS = "fingers"
 the library's (prsc/library/<arm>.json), a spec may state a file arm's (`with fingers [...]`)."""
 
 
+ROBOT_TOOL = "tcp"
+"""The property a robot has and furniture does not: its tool frame (every Robot has one)."""
+
+
 def _interior(obj: dict[str, Any]) -> Interior | None:
     dims = tuple(float(v) for v in obj["dimensions"])
     declared = declared_interior(dims, obj.get("properties", {}))  # type: ignore[arg-type]
@@ -36,8 +40,10 @@ def task_object(obj: dict[str, Any]) -> TaskObject:
                          interior.floor_top, interior.floor_top)
     camera = obj.get("camera")
     view = None if not camera else (float(camera["fovy"]), float(camera["resolution"][0]) / float(camera["resolution"][1]))
+    properties = obj.get("properties") or {}
     return TaskObject(str(obj["name"]), dims, support, interior is not None, view,  # type: ignore[arg-type]
-                      tuple(str(f) for f in obj.get("properties", {}).get(FINGERS, ())), bool(obj.get("static", False)))
+                      tuple(str(f) for f in properties.get(FINGERS, ())), bool(obj.get("static", False)),
+                      robot=ROBOT_TOOL in properties)
 
 
 def link_object(obj: str, link: str, boxes: tuple[Box, ...]) -> TaskObject:

@@ -69,18 +69,21 @@ class EpisodeMonitor:
         # each statement as a function of the world state, made once (updates run at every control step)
         self._goals = [(self.evaluator.compiled(g.expr), g.hold, w) for g, w in zip(statements.goals, self.windows)]
         self._failures = [(self.evaluator.compiled(f.expr), f.label, f"fail:{f.label}") for f in statements.failures]
+        self._has_goals = bool(statements.goals)
+        # the records read at a step: every step's, and at the first also the initial ones
+        self._step_records = [r for r in statements.records if r.when == "step"]
+        self._first_records = [r for r in statements.records if r.when in ("step", "initial")]
 
     def update(self, world: WorldState) -> TaskStatus:
         """Evaluate every statement at `world.time`; the status after it."""
         time = float(world.time)
-        statements = self.task.statements
         first = self.start is None
         if first:
             self.start = time
         self.time = time
         robustness: dict[str, float] = {}
         goal_value = math.inf
-        goals_hold = bool(statements.goals)
+        goals_hold = self._has_goals
         all_now = True
         for goal, hold, window in self._goals:
             truth = goal(world)
@@ -88,35 +91,39 @@ class EpisodeMonitor:
             value = window.push(time, truth.robustness, truth.holds)
             if time - self.start < hold - TIME_SLACK:  # type: ignore[operator]
                 value = min(value, 0.0)  # a window the episode has not filled yet has not held
-            goal_value = min(goal_value, value)
+            if value < goal_value:
+                goal_value = value
             goals_hold = goals_hold and window.held(time)
-        if statements.goals:
-            self.best_goal = max(self.best_goal, goal_value)
+        if self._has_goals:
+            if goal_value > self.best_goal:
+                self.best_goal = goal_value
             robustness["goal"] = goal_value
             if first:
                 self.trivial = all_now
         failed = None
+        worst = self.worst_failure
         for failure, label, key in self._failures:
             truth = failure(world)
-            self.worst_failure[label] = max(self.worst_failure[label], truth.robustness)
+            if truth.robustness > worst[label]:
+                worst[label] = truth.robustness
             robustness[key] = -truth.robustness
             if truth.holds and failed is None:
                 failed = label
-        for record in statements.records:
-            if record.when == "step" or (record.when == "initial" and first):
-                value = json_value(self.evaluator.value(record.expr, world))
-                if record.when == "step":
-                    self.records[record.name].append(value)  # type: ignore[union-attr]
-                else:
-                    self.records[record.name] = value
+        for record in self._step_records if not first else self._first_records:
+            value = json_value(self.evaluator.value(record.expr, world))
+            if record.when == "step":
+                self.records[record.name].append(value)  # type: ignore[union-attr]
+            else:
+                self.records[record.name] = value
         if self.outcome is None:
+            limit = self.task.statements.time_limit
             if failed is not None:
                 self._decide(f"fail:{failed}", time)
             elif goals_hold:
                 self._decide("success", time)
-            elif statements.time_limit is not None and time - self.start >= statements.time_limit - TIME_SLACK:  # type: ignore[operator]
+            elif limit is not None and time - self.start >= limit - TIME_SLACK:  # type: ignore[operator]
                 self._decide("timeout", time)
-        return TaskStatus(time, self.outcome, goal_value if statements.goals else math.nan, robustness)
+        return TaskStatus(time, self.outcome, goal_value if self._has_goals else math.nan, robustness)
 
     def _decide(self, outcome: str, time: float) -> None:
         self.outcome, self.decided_at = outcome, time

@@ -99,7 +99,7 @@ class PybulletTask:
     def _parts(self, name: str) -> list[tuple[int, int | None]]:
         """(body, link or None for every link) pairs whose shapes stand for `name`: one link of a
         "robot/link" name; the moving links of a fixed-base robot, as in MuJoCo (its base rests
-        where it was placed: prsc/runner/task_monitor.py); else the whole body."""
+        where it was placed: prsc/runner/task_monitor.py); else the whole body (furniture too)."""
         if name in self.links:
             return [self.links[name]]
         parts = self._moving.get(name)
@@ -111,7 +111,10 @@ class PybulletTask:
                 info = p.getJointInfo(body, link, physicsClientId=client)
                 if info[2] != p.JOINT_FIXED or info[16] in moving:  # its own joint moves, or its parent does
                     moving.append(link)
-            parts = self._moving[name] = [(body, k) for k in moving] if fixed_base and moving else [(body, None)]
+            by_moving_links = (not any(o.name == name for o in self.task.objects)
+                               or self.task.object(name).touches_by_moving_links)  # a robot's base rests where it was placed
+            mounted = fixed_base and bool(moving) and by_moving_links
+            parts = self._moving[name] = [(body, k) for k in moving] if mounted else [(body, None)]
         return parts
 
     def distance(self, a: str, b: str, enough: float | None = None) -> float:

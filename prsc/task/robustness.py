@@ -55,6 +55,7 @@ class Evaluator:
         self._supports = {o.name: prepared_polygon(o.support) for o in task.objects}
         self._interiors = {o.name: prepared_polygon(o.interior) for o in task.objects if o.interior is not None}
         self._compiled: dict[int, tuple[Term, Callable[[WorldState], object]]] = {}
+        self._static = frozenset(o.name for o in task.objects if o.static)
 
     # ------------------------------------------------------------ values
     # Each term is turned once into a closure over its children (evaluated at every control step).
@@ -75,6 +76,19 @@ class Evaluator:
         return found[1]
 
     def _compile(self, term: Term) -> Callable[[WorldState], object]:
+        function = self._compile_term(term)
+        return _once(function) if term.op != "const" and self._episode_constant(term) else function
+
+    def _episode_constant(self, term: Term) -> bool:
+        """Whether a number or vector term reads only constants and static objects' poses and sizes,
+        which do not move during an episode (`table.z + table.height / 2`): its value is read once."""
+        if term.op == "object":
+            return term.name in self._static
+        if term.is_predicate or term.op == "link" or (term.op == "attr" and term.name == "speed"):
+            return False
+        return all(self._episode_constant(a) for a in term.args)
+
+    def _compile_term(self, term: Term) -> Callable[[WorldState], object]:
         op, args, name = term.op, term.args, term.name
         children = [self.compiled(a) for a in args]
         if op == "const":
@@ -254,6 +268,18 @@ class Evaluator:
         margins = np.stack([(tan_x * y - x) / math.hypot(1, tan_x), (tan_x * y + x) / math.hypot(1, tan_x),
                             (tan_y * y - z) / math.hypot(1, tan_y), (tan_y * y + z) / math.hypot(1, tan_y), y])
         return float(margins.min())
+
+
+def _once(function: Callable[[WorldState], object]) -> Callable[[WorldState], object]:
+    """`function`'s value at the first state it is asked about, at every later state."""
+    kept: list = []
+
+    def constant(w):
+        if kept:
+            return kept[0]
+        kept.append(function(w))
+        return kept[0]
+    return constant
 
 
 def every_term(task: Task) -> list[Term]:

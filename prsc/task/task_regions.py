@@ -4,6 +4,7 @@ polygon times an interval, so the distance from outside is the hypot of the two 
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -64,15 +65,23 @@ def polygon_signed_distance(region: Region | _Polygon, q: np.ndarray) -> np.ndar
 
 
 def point_polygon_distance(poly: _Polygon, x: float, y: float) -> float:
-    """polygon_signed_distance of one point, in plain floats (the evaluator's per-step path)."""
-    inside = min(c - nx * x - ny * y for nx, ny, c in poly.rows)
+    """polygon_signed_distance of one point, in plain floats (the evaluator's per-step path: comparisons
+    instead of min() and max() calls, the same numbers)."""
+    inside = math.inf
+    for nx, ny, c in poly.rows:
+        margin = c - nx * x - ny * y
+        if margin < inside:
+            inside = margin
     if inside >= 0.0:
         return inside
-    best = float("inf")
+    best = math.inf
     for sx, sy, ex, ey, length2 in poly.edges:
         rx, ry = x - sx, y - sy
-        t = min(1.0, max(0.0, (rx * ex + ry * ey) / length2))
-        best = min(best, (rx - t * ex) ** 2 + (ry - t * ey) ** 2)
+        t = (rx * ex + ry * ey) / length2
+        t = 0.0 if t < 0.0 else 1.0 if t > 1.0 else t
+        squared = (rx - t * ex) ** 2 + (ry - t * ey) ** 2
+        if squared < best:
+            best = squared
     return -best ** 0.5
 
 

@@ -173,6 +173,16 @@ class TaskObject:
     # (`in`: the floor within its walls) beside its support surface (`on`), both in its box frame.
     link: LinkFrame | None = None
     interior: Region | None = None
+    # A robot (the scene names its tool frame) touches with its moving links when mounted: its base
+    # rests where it was placed. Furniture touches with all its parts. None: a task file from before
+    # the flag, read as then (every fixed articulated object by its moving links).
+    robot: bool | None = False
+
+    @property
+    def touches_by_moving_links(self) -> bool:
+        """Whether, fixed and articulated, it touches with its moving links only: a robot does (its base
+        rests where it was placed), furniture does not; a task file without the flag, as it was read then."""
+        return self.robot is not False
 
 
 @dataclass(frozen=True)
@@ -252,7 +262,7 @@ def _region_of(d: dict[str, Any]) -> Region:
 def _object_json(o: TaskObject) -> dict[str, Any]:
     out = {"name": o.name, "dimensions": list(o.dimensions), "container": o.container,
            "support": _region_json(o.support), "camera": None if o.camera is None else list(o.camera),
-           "fingers": list(o.fingers), "static": o.static}
+           "fingers": list(o.fingers), "static": o.static, "robot": o.robot}
     if o.link is not None:
         out["link"] = {"of": o.link.of, "name": o.link.link, "offset": list(o.link.offset)}
         out["interior"] = None if o.interior is None else _region_json(o.interior)
@@ -266,4 +276,5 @@ def _object_of(d: dict[str, Any]) -> TaskObject:
                       tuple(str(f) for f in d.get("fingers", ())), bool(d.get("static", False)),
                       None if d.get("link") is None else LinkFrame(str(d["link"]["of"]), str(d["link"]["name"]),
                                                                    tuple(float(v) for v in d["link"]["offset"])),
-                      None if d.get("interior") is None else _region_of(d["interior"]))
+                      None if d.get("interior") is None else _region_of(d["interior"]),
+                      None if d.get("robot") is None else bool(d["robot"]))

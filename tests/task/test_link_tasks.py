@@ -371,3 +371,35 @@ def test_an_arm_touching_a_link_reads_the_link_s_own_geoms_in_mujoco_and_pybulle
         pybullet.disconnect(client)
     for key in ("fail:arm on the drawer", "fail:drawer on the arm"):
         assert bullet.robustness[key] == pytest.approx(least, abs=2e-3)
+
+
+def test_furniture_touches_with_its_carcass_and_a_robot_with_its_moving_links_only(compiled):
+    """`c1 touches cab` counts the cabinet's fixed carcass (a cube resting on its top touches it), in
+    MuJoCo and in pybullet; only a robot's base is left out (it rests where it was placed)."""
+    scene, model, data = _mujoco(compiled)
+    task = Task.from_json(scene["task"])
+    assert task.object("cab").robot is False and Task.from_json(task.to_json()) == task
+    carcass = model.body("cab/carcass").id
+    assert model.body_weldid[carcass] == 0  # welded to the world: the old rule dropped it
+    geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] == carcass]
+    tops = [data.geom_xpos[g][2] + model.geom_size[g][2] for g in geoms]  # boxes, axis-aligned
+    top = geoms[int(np.argmax(tops))]
+    qpos = model.jnt_qposadr[model.body("c1").jntadr[0]]
+    data.qpos[qpos:qpos + 3] = [data.geom_xpos[top][0], data.geom_xpos[top][1], max(tops) + 0.02 + 1e-4]
+    data.qpos[qpos + 3:qpos + 7] = [1, 0, 0, 0]
+    mujoco.mj_forward(model, data)
+    monitor = TaskMonitor(scene, model)
+    assert carcass in set(model.geom_bodyid[monitor.world.geoms["cab"]].tolist())
+    distance = monitor.state(model, data).distance("c1", "cab")
+    assert distance == pytest.approx(1e-4, abs=1e-6)  # 0.1 mm above the top: the carcass, not the drawer
+    evaluator = Evaluator(task)
+    touches = Term("touches", (Term("object", name="c1"), Term("object", name="cab")))
+    assert evaluator.robustness(touches, monitor.state(model, data)) == pytest.approx(-1e-4, abs=1e-6)
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        bullet = PybulletTask.load(compiled / "sdf" / "00000.sdf", client)
+        position = data.body("c1").xpos
+        pybullet.resetBasePositionAndOrientation(bullet.bodies["c1"], position.tolist(), [0, 0, 0, 1], physicsClientId=client)
+        assert bullet.distance("c1", "cab") == pytest.approx(1e-4, abs=2e-3)
+    finally:
+        pybullet.disconnect(client)

@@ -166,3 +166,28 @@ def test_a_distance_answered_only_as_far_as_enough_gives_the_same_robustness():
             exact = evaluator.robustness(term, _world(a, b, distance))
             assert evaluator.robustness(term, WorldState(0.0, {"a": a, "b": b}, lazy)) == exact
     assert loose > 500 and asked - loose > 500  # both answers were given often
+
+
+def test_terms_of_static_objects_are_read_once_per_episode_and_moving_ones_at_every_state():
+    """`a.z < b.z + b.height / 2` with b static: b's side is read at the first state (a static object
+    does not move during an episode), a's at every state; with b not static, both at every state."""
+    from dataclasses import replace
+
+    task = _task()
+    term = Term("compare", (Term("attr", (Term("object", name="a"),), name="z"),
+                            Term("arith", (Term("attr", (Term("object", name="b"),), name="z"),
+                                           Term("arith", (Term("attr", (Term("object", name="b"),), name="height"),
+                                                          Term("const", value=2.0)), name="/")), name="+")), name="<")
+
+    def at(a_z: float, b_z: float) -> WorldState:
+        still = np.zeros(3)
+        return _world(Pose(np.array([0.0, 0.0, a_z]), np.eye(3), still, still),
+                      Pose(np.array([0.0, 0.0, b_z]), np.eye(3), still, still))
+
+    static = Task(task.statements, (task.objects[0], replace(task.objects[1], static=True)))
+    for which, b_read_later in ((static, False), (task, True)):
+        evaluator = Evaluator(which)
+        assert evaluator.truth(term, at(0.05, 0.0)) == Truth(True, 0.1 - 0.05)
+        # b "moves" (it cannot when static): its side keeps its first value, a's side follows a
+        later = evaluator.truth(term, at(0.02, 1.0))
+        assert abs(later.robustness - ((1.0 if b_read_later else 0.0) + 0.1 - 0.02)) < 1e-12
