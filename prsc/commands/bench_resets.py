@@ -9,7 +9,8 @@ enough scenes that most come from full batches, the ramp included; then on, full
 and one at a time through
 `scenario.scene`; `apply` alone and a compile alone (scenes drawn beforehand); draw + apply (an
 RL reset) and draw + compile (the path without `apply`), from those rates; and a 4-environment
-`gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed, with
+`gymnasium.vector.SyncVectorEnv` of `prsc.SceneEnv` when the [gym] extra is installed (timed
+from its seeded reset over whole batches of draws), with
 a `SceneEnv.step` (no rendering) against the same `mujoco.mj_step` calls on its model, timed
 in alternating rounds. CPU time of this process, so other load on the machine does not count.
 """
@@ -74,11 +75,23 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     from prsc.scene_env import SceneEnv
 
     envs = gymnasium.vector.SyncVectorEnv([lambda: SceneEnv(spec, include_dirs=include_dirs)] * VECTOR_ENVS)
-    envs.reset(seed=seed)
-    rates[f"SyncVectorEnv x{VECTOR_ENVS} reset"] = VECTOR_ENVS * _rate(max(1, n // VECTOR_ENVS), lambda k: envs.reset())
+    # From the seeded reset on, as many resets as each environment's draws hold (its ramp of
+    # batches): every scene drawn is used, so the rate carries the draws' whole cost.
+    per_env = _ramp_total(max(1, n // VECTOR_ENVS), RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX)
+    rates[f"SyncVectorEnv x{VECTOR_ENVS} reset"] = VECTOR_ENVS * _rate(
+        per_env, lambda k: envs.reset(seed=seed) if k == 0 else envs.reset())
     envs.close()
     rates.update(bench_steps(SceneEnv(spec, include_dirs=include_dirs), seed, steps=10 * n))
     return rates
+
+
+def _ramp_total(count: int, first: int, largest: int) -> int:
+    """The fewest scenes, at least `count`, that a drawer's batches (`first`, then each twice the
+    last up to `largest`) hold whole."""
+    total, batch = 0, first
+    while total < count:
+        total, batch = total + batch, min(2 * batch, largest)
+    return total
 
 
 def bench_steps(env, seed: int, steps: int, rounds: int = 10) -> dict[str, float]:
