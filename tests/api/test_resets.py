@@ -408,3 +408,11 @@ def test_the_domain_randomisation_example_runs_as_written(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "4 distinct first images of 4 episodes" in done.stdout
     assert (tmp_path / "domain_randomisation.png").is_file()
+
+
+def test_the_vector_env_row_times_whole_batches_of_draws():
+    """`prsc bench --resets` times a vector environment over the resets its draws hold whole (64, then
+    128, then 256 each): a row timed inside one untimed draw would leave the draw out."""
+    from prsc.commands.bench_resets import _ramp_total
+
+    assert [_ramp_total(n, 64, 256) for n in (1, 50, 64, 65, 192, 193, 500)] == [64, 64, 64, 192, 192, 448, 704]
