@@ -126,7 +126,9 @@ def primitive_extents(shape: str, dimensions: np.ndarray) -> np.ndarray:
     if shape == "box":
         return dims
     across = np.minimum(dims[:, 0], dims[:, 1]) if shape == "cylinder" else dims.min(axis=1)
-    return np.stack([across, across, dims[:, 2] if shape == "cylinder" else across], axis=1)
+    extents = np.empty_like(dims)  # columns written: np.stack costs more than the numbers (a reset writes these)
+    extents[:, 0], extents[:, 1], extents[:, 2] = across, across, dims[:, 2] if shape == "cylinder" else across
+    return extents
 
 
 def primitive_part(shape: str, dimensions: tuple[float, float, float]) -> Part:

@@ -82,7 +82,9 @@ def primitive_inertia(shape: str, sizes: np.ndarray, masses: np.ndarray) -> np.n
     density = np.asarray(masses, dtype=float) / volume
     s0, s1, s2 = (density * m for m in moments)
     trace = s0 + s1 + s2  # as composite_inertial's tensor: trace(second) I - second
-    return np.stack([trace - s0, trace - s1, trace - s2], axis=-1)
+    inertia = np.empty(np.shape(trace) + (3,))
+    inertia[..., 0], inertia[..., 1], inertia[..., 2] = trace - s0, trace - s1, trace - s2
+    return inertia
 
 
 def _unit_second_moment(part: Part) -> tuple[float, np.ndarray, np.ndarray]:

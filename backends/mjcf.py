@@ -148,8 +148,11 @@ def primitive_geom_sizes(shape: str, extents: np.ndarray) -> np.ndarray:
         return extents / 2
     cylinder = shape == "cylinder"
     radius = (np.minimum(extents[:, 0], extents[:, 1]) if cylinder else extents.min(axis=1)) / 2  # Part.radius
-    zeros = np.zeros(len(extents))
-    return np.stack([radius, extents[:, 2] / 2 if cylinder else zeros, zeros], axis=1)
+    sizes = np.zeros_like(extents)
+    sizes[:, 0] = radius
+    if cylinder:
+        sizes[:, 1] = extents[:, 2] / 2
+    return sizes
 
 
 def geom_size(part) -> tuple[float, ...]:

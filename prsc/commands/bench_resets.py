@@ -5,7 +5,8 @@ files, each in turn in the same run, then one table of them all.
 
 Rows: drawing the scene alone, through `scenario.drawer` as `SceneEnv.reset` does (its first
 draw RESET_DRAW_AHEAD scenes, each later one twice the last up to RESET_DRAW_AHEAD_MAX, over
-enough scenes that most come from full batches, the ramp included; then on, full batches only)
+as many whole batches as hold enough scenes that most come from full ones, the ramp included;
+then on, three full batches)
 and one at a time through
 `scenario.scene`; `apply` alone and a compile alone (scenes drawn beforehand); draw + apply (an
 RL reset) and draw + compile (the path without `apply`), from those rates; and a 4-environment
@@ -50,7 +51,9 @@ def bench_resets(spec: str, n: int, include_dirs: list[str], seed: int = 0) -> d
     # ramp of small draws is in the rate, and enough scenes follow it that full batches dominate.
     # One scene at a time through `scenario.scene` is kept as a row to compare against.
     draw = scenario.drawer(seed + 1, RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX)
-    ramped = max(n, 4 * RESET_DRAW_AHEAD_MAX)
+    # As many resets as the ramp's batches hold whole: every scene drawn is used (1,024 resets would
+    # pay for 1,216 scenes, the last batch of 256 cut to 64), as in the SyncVectorEnv row.
+    ramped = _ramp_total(max(n, 4 * RESET_DRAW_AHEAD_MAX), RESET_DRAW_AHEAD, RESET_DRAW_AHEAD_MAX)
     drawn = _rate(ramped, lambda k: draw(k))
     # Then the same loop on, every draw a full batch: what a long training run's resets cost.
     drawn_steady = _rate(3 * RESET_DRAW_AHEAD_MAX, lambda k: draw(ramped + k))

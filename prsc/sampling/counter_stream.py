@@ -66,7 +66,8 @@ _CACHED_WIDTH = 64  # sites this narrow keep their mixed counters (4,096 of them
 
 def _mixed_counters(site: int, width: int) -> np.ndarray:
     """The mixed counters of a draw site's first `width` uniforms: the same for every scene."""
-    counters = (np.uint64(site) * np.uint64(SITE_WIDTH) + np.arange(width, dtype=np.uint64)) * _GOLDEN + _GOLDEN
+    with np.errstate(over="ignore"):  # numpy wraps uint64 arrays silently; a product of scalars it would warn of
+        counters = (np.uint64(site) * np.uint64(SITE_WIDTH) + np.arange(width, dtype=np.uint64)) * _GOLDEN + _GOLDEN
     return _mix(counters)
 
 
@@ -86,11 +87,11 @@ def uniforms(keys: np.ndarray, site: int, width: int) -> np.ndarray:
         key = int(keys[0])
         first = (site * SITE_WIDTH) * _G + _G
         return np.array([[_unit(key, first + j * _G) for j in range(width)]])
-    with np.errstate(over="ignore"):
-        counters = _site_counters(site, width) if width <= _CACHED_WIDTH else _mixed_counters(site, width)
-        z = keys[:, None] ^ counters[None, :]
-        z *= _GOLDEN
-        _mix(z)
+    # Arrays only (uint64 arrays wrap without a warning): no errstate context, 3 us a call, a round's many calls.
+    counters = _site_counters(site, width) if width <= _CACHED_WIDTH else _mixed_counters(site, width)
+    z = keys[:, None] ^ counters[None, :]
+    z *= _GOLDEN
+    _mix(z)
     return (z >> _S11).astype(np.float64) * _UNIT
 
 
@@ -99,8 +100,7 @@ def candidate_keys(keys: np.ndarray, first: int, count: int) -> np.ndarray:
 
     The same mixer keyed by the scene's key, so candidate c of a scene depends on (key, c) alone."""
     counters = (np.arange(first, first + count, dtype=np.uint64) + np.uint64(1)) * _GOLDEN
-    with np.errstate(over="ignore"):
-        z = np.asarray(keys, dtype=np.uint64)[:, None] ^ _mix(counters)[None, :]
-        z *= _GOLDEN
-        _mix(z)
+    z = np.asarray(keys, dtype=np.uint64)[:, None] ^ _mix(counters)[None, :]  # arrays only, as in `uniforms`
+    z *= _GOLDEN
+    _mix(z)
     return z.reshape(-1)

@@ -79,8 +79,8 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
         return hit
     gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(3)]  # (m, s, P) each
     # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
-    high, tall = np.abs(gaps[2], out=gaps[2]), reaches[:, :, None, 2] + others.reaches[:, None, :, 2]
-    close = live[:, :, None] & (high < tall - CONTACT_TOL)
+    high = np.abs(gaps[2], out=gaps[2])
+    every = bool(live.all())  # then no mask of the live proposals is taken over every pair
     if upright:
         inner, outer = circles(halves)
         apart = gaps[0] * gaps[0]
@@ -88,19 +88,26 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
         np.sqrt(apart, out=apart)
         # The circles decide with MARGIN over rounding, so their constants are folded into each proposal's
         # numbers (one operation fewer over every pair): the order of the additions changes no decision.
+        # Their height test, too, passes only pairs whose heights overlap by more than the tolerance.
         sure = high < (reaches[:, :, 2] - (CONTACT_TOL + MARGIN))[:, :, None] + others.reaches[:, None, :, 2]
         sure &= apart < (inner - (CONTACT_TOL + MARGIN))[:, :, None] + others.inner[:, None, :]
-        sure &= close
+        if not every:
+            sure &= live[:, :, None]
         hit = sure.any(axis=2)
-        close &= ~hit[:, :, None]
-        close &= apart < (outer - (CONTACT_TOL - MARGIN))[:, :, None] + others.outer[:, None, :]
+        close = apart < (outer - (CONTACT_TOL - MARGIN))[:, :, None] + others.outer[:, None, :]
+        close &= ~(hit if every else hit | ~live)[:, :, None]
         scene, proposal, partner = np.nonzero(close)
-        near = np.ones(len(scene), dtype=bool)  # the world axes' broad phase, on the few pairs left
+        # The broad phase on the few pairs left: heights, then the world axes (the same operations per pair).
+        near = high[scene, proposal, partner] < reaches[scene, proposal, 2] + others.reaches[scene, partner, 2] - CONTACT_TOL
         for axis in range(2):
             near &= np.abs(gaps[axis][scene, proposal, partner]) < \
                 reaches[scene, proposal, axis] + others.reaches[scene, partner, axis] - CONTACT_TOL
         scene, proposal, partner = scene[near], proposal[near], partner[near]
     else:
+        tall = reaches[:, :, None, 2] + others.reaches[:, None, :, 2]
+        close = high < tall - CONTACT_TOL
+        if not every:
+            close &= live[:, :, None]
         for axis in range(2):
             close &= np.abs(gaps[axis]) < reaches[:, :, None, axis] + others.reaches[:, None, :, axis] - CONTACT_TOL
         scene, proposal, partner = np.nonzero(close)
