@@ -114,9 +114,9 @@ def _sizes_at_once(objects: list[Any], resized: Iterable[int], free: np.ndarray)
         return None
     if not exact or dimensions.shape != (len(raws), 3):
         return None
-    # limits.size_problem and mass_problem, with NaN failing every comparison.
-    fits = ((dimensions >= MIN_SIZE) & (dimensions <= MAX_SIZE)).all() and ((mass >= 0.0) & (mass <= MAX_MASS)).all()
-    if not fits or (free[list(resized)] & (mass == 0.0)).any():
+    # limits.size_problem and mass_problem, with NaN failing every comparison (a NaN is each reduction's value).
+    fits = dimensions.min() >= MIN_SIZE and dimensions.max() <= MAX_SIZE and mass.min() >= 0.0 and mass.max() <= MAX_MASS
+    if not fits or (mass.min() == 0.0 and (free[list(resized)] & (mass == 0.0)).any()):
         return None
     return dimensions, mass
 

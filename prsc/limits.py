@@ -26,3 +26,13 @@ def mass_problem(value: float) -> str | None:
     if value > MAX_MASS:
         return f"is {value:g} kg, more than a simulator can represent ({MAX_MASS:g} kg)"
     return None
+
+
+def size_fits(value: float) -> bool:
+    """Whether `size_problem` finds nothing (a NaN fails both comparisons): one test where a scene is written."""
+    return MIN_SIZE <= value <= MAX_SIZE
+
+
+def mass_fits(value: float) -> bool:
+    """Whether `mass_problem` finds nothing (a NaN fails both comparisons)."""
+    return 0.0 <= value <= MAX_MASS

@@ -18,7 +18,7 @@ from prsc.errors import PrscError, Span
 from prsc.ir.builtins import DENSITY, joint_name
 from prsc.ir.models import model_of
 from prsc.geometry.rotations import matrix_to_quat_one
-from prsc.limits import mass_problem, size_problem
+from prsc.limits import mass_fits, mass_problem, size_fits, size_problem
 
 FORMAT = "prsc-scene"
 VERSION = 1
@@ -258,7 +258,7 @@ class SizedTemplate:
         assert obj.position is not None and obj.rotation is not None and obj.dims is not None
         w, l, h = obj.dims
         mass = object_mass(obj.dims, None if self.mass_from_size else self.template["mass"])
-        if any(size_problem(float(v)) for v in obj.dims) or mass_problem(mass):
+        if not (size_fits(w) and size_fits(l) and size_fits(h) and mass_fits(mass)):  # object_json says what is wrong
             return object_json(obj)
         out = placed_template(self.template, obj.position.tolist(), quaternion_wxyz(obj.rotation))
         out["dimensions"] = [float(w), float(l), float(h)]
