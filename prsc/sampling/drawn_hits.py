@@ -69,6 +69,17 @@ def circles(halves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.minimum(halves[..., 0], halves[..., 1]), np.hypot(halves[..., 0], halves[..., 1])
 
 
+def _level(heights: np.ndarray, reaches: np.ndarray, partner_heights: np.ndarray, partner_reaches: np.ndarray) -> bool:
+    """Whether in every scene each proposal's heights (centres (m, s) and reaches) overlap each partner's ((m, P))
+    by more than the tolerance plus 2 * MARGIN: |a - b| < ra + rb - t holds for every pair when the highest
+    bottom of one side lies below the lowest top of the other less t, both ways (a NaN fails it)."""
+    slack = CONTACT_TOL + 2 * MARGIN
+    bottoms, tops = heights - reaches, heights + reaches
+    partner_bottoms, partner_tops = partner_heights - partner_reaches, partner_heights + partner_reaches
+    return bool((bottoms.max(axis=1) < partner_tops.min(axis=1) - slack).all()
+                and (partner_bottoms.max(axis=1) < tops.min(axis=1) - slack).all())
+
+
 def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, reaches: np.ndarray, live: np.ndarray,
                others: Partners, upright: bool) -> np.ndarray:
     """Which live proposals (m, s, ...: s per scene) collide with a partner's box in their scene: one broad phase
@@ -77,11 +88,13 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
     positions = others.positions
     if not positions.shape[1]:
         return hit
-    gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(3)]  # (m, s, P) each
-    # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
-    high = np.abs(gaps[2], out=gaps[2])
     every = bool(live.all())  # then no mask of the live proposals is taken over every pair
     if upright:
+        # Over every pair, only the plane's distances where, in every scene, each proposal's heights overlap each
+        # partner's by more than the tolerance (all stand on one floor): `level` decides that from their
+        # extremes with 2 * MARGIN over rounding, so each pair's height tests would pass; elsewhere they run.
+        level = _level(centres[:, :, 2], reaches[:, :, 2], positions[:, :, 2], others.reaches[:, :, 2])
+        gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(2 if level else 3)]
         inner, outer = circles(halves)
         apart = gaps[0] * gaps[0]
         apart += gaps[1] * gaps[1]
@@ -89,8 +102,10 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
         # The circles decide with MARGIN over rounding, so their constants are folded into each proposal's
         # numbers (one operation fewer over every pair): the order of the additions changes no decision.
         # Their height test, too, passes only pairs whose heights overlap by more than the tolerance.
-        sure = high < (reaches[:, :, 2] - (CONTACT_TOL + MARGIN))[:, :, None] + others.reaches[:, None, :, 2]
-        sure &= apart < (inner - (CONTACT_TOL + MARGIN))[:, :, None] + others.inner[:, None, :]
+        sure = apart < (inner - (CONTACT_TOL + MARGIN))[:, :, None] + others.inner[:, None, :]
+        if not level:
+            high = np.abs(gaps[2], out=gaps[2])
+            sure &= high < (reaches[:, :, 2] - (CONTACT_TOL + MARGIN))[:, :, None] + others.reaches[:, None, :, 2]
         if not every:
             sure &= live[:, :, None]
         hit = sure.any(axis=2)
@@ -98,14 +113,17 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
         close &= ~(hit if every else hit | ~live)[:, :, None]
         scene, proposal, partner = np.nonzero(close)
         # The broad phase on the few pairs left: heights, then the world axes (the same operations per pair).
-        near = high[scene, proposal, partner] < reaches[scene, proposal, 2] + others.reaches[scene, partner, 2] - CONTACT_TOL
+        near = np.ones(len(scene), dtype=bool) if level else \
+            high[scene, proposal, partner] < reaches[scene, proposal, 2] + others.reaches[scene, partner, 2] - CONTACT_TOL
         for axis in range(2):
             near &= np.abs(gaps[axis][scene, proposal, partner]) < \
                 reaches[scene, proposal, axis] + others.reaches[scene, partner, axis] - CONTACT_TOL
         scene, proposal, partner = scene[near], proposal[near], partner[near]
     else:
+        gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(3)]  # (m, s, P) each
+        # Axis by axis: a reduction over an axis of 3 costs more than the comparisons.
         tall = reaches[:, :, None, 2] + others.reaches[:, None, :, 2]
-        close = high < tall - CONTACT_TOL
+        close = np.abs(gaps[2]) < tall - CONTACT_TOL
         if not every:
             close &= live[:, :, None]
         for axis in range(2):
