@@ -12,7 +12,9 @@ pairs are decided without the SAT, from two circles about each box's centre in t
   pair whose circumscribed circles overlap by less does not;
 - both bounds hold with a margin far above rounding (`MARGIN`), so the pairs left to the SAT are
   exactly those it would decide differently from the circles, and every decision is the SAT's.
-A proposal that surely meets one partner is not tested against the others.
+A proposal that surely meets one partner is not tested against the others. Where, in every scene, all
+heights overlap by more than the tolerance plus 2 * MARGIN (parts on one floor: `_level`, from their
+extremes), no pair's height is tested, since every test would pass.
 """
 
 from __future__ import annotations
@@ -96,7 +98,7 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
     every = bool(live.all())  # then no mask of the live proposals is taken over every pair
     if upright:
         # Over every pair, only the plane's distances where, in every scene, each proposal's heights overlap each
-        # partner's by more than the tolerance (all stand on one floor): `level` decides that from their
+        # partner's by more than the tolerance (all stand on one floor): `_level` decides that from their
         # extremes with 2 * MARGIN over rounding, so each pair's height tests would pass; elsewhere they run.
         level = _level(centres[:, :, 2], reaches[:, :, 2], positions[:, :, 2], others.reaches[:, :, 2])
         gaps = [centres[:, :, None, axis] - positions[:, None, :, axis] for axis in range(2 if level else 3)]
@@ -106,7 +108,7 @@ def drawn_hits(centres: np.ndarray, rotations: np.ndarray, halves: np.ndarray, r
         np.sqrt(apart, out=apart)
         # The circles decide with MARGIN over rounding, so their constants are folded into each proposal's
         # numbers (one operation fewer over every pair): the order of the additions changes no decision.
-        # Their height test, too, passes only pairs whose heights overlap by more than the tolerance.
+        # Their height test (with MARGIN) implies the exact one, which the pairs left take below.
         sure = apart < (inner - (CONTACT_TOL + MARGIN))[:, :, None] + others.inner[:, None, :]
         if not level:
             high = np.abs(gaps[2], out=gaps[2])

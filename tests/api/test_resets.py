@@ -1,7 +1,8 @@
 """One MuJoCo model per spec (`scenario.model()`), scenes written into it without
 recompiling (`scenario.apply`), and `prsc.SceneEnv`, a Gymnasium environment on top.
 
-- For 10 scenes each of Table-Cube and bin_picking (random part sizes), every array that
+- For 10 scenes each of Table-Cube, bin_picking (random part sizes), bin_ten_parts and
+  bin_ten_parts_arm (the bin beside the Panda), every array that
   a scene decides (body poses, geom sizes and bounds, masses, inertias, colours, the home
   key, what mj_setConst derives) equals a freshly compiled model's, and so do the body
   poses after mj_forward (<= 1e-9 m);
@@ -53,7 +54,7 @@ def _fresh_at_home(scene):
     return fresh, _at_home(fresh)
 
 
-@pytest.mark.parametrize("spec", ["table_cube", "bin_picking", "bin_ten_parts"])
+@pytest.mark.parametrize("spec", ["table_cube", "bin_picking", "bin_ten_parts", "bin_ten_parts_arm"])
 def test_apply_gives_the_model_a_fresh_compile_gives(spec):
     # The sequential law draws bin_picking 10x faster than the joint one; apply does not care.
     scenario = Scenario(compile_sampler(REPO / "specs" / f"{spec}.prs", law="sequential"))
