@@ -7,6 +7,7 @@ import math
 from collections.abc import Callable, Sequence
 
 from prsc.errors import PrscError, Span
+from prsc.user_assets.asset_fitting import library_arm
 from prsc.ir import model as ir
 from prsc.ir.checks import constant_number
 from prsc.ir.program import ObjectDecl, TaskLinkRef
@@ -205,6 +206,18 @@ class TaskLowering:
                                 f"{name} is a camera: a sensor, not a body, so `{word}` cannot hold of it", expr.span)
         return [Term("object", name=name) for name in objects]
 
+    def _check_fingers(self, name: str, span: Span) -> None:
+        """`R holds A` reads two finger links of R's gripper: an error here when R names fewer."""
+        decl = self.objects[name]
+        fingers, model = decl.prop("fingers"), decl.prop("model")
+        count = len(fingers.items) if isinstance(fingers, ir.ListExpr) else 0
+        arm = library_arm(model.value) if isinstance(model, ir.Const) and not count else None
+        count = len(arm.fitting.fingers) if arm is not None else count  # ir/asset_models.py gives them later
+        if count < 2:
+            raise PrscError(f"`holds` reads two finger links of {name}'s gripper, and {name} names "
+                            f"{'none' if not count else 'one'}: a library arm's are known; another robot's file "
+                            "gives prsc none to read", span)
+
     def _relation(self, expr: nodes.Relation) -> Term:
         kind = expr.kind
         subjects = self._operand(expr.subject, expr)
@@ -214,6 +227,9 @@ class TaskLowering:
         by = () if expr.by is None else (self.number(expr.by),)
         if kind not in DIRECTIONS and by:  # pragma: no cover - the grammar puts `by` on directions only
             raise PrscError(f"`by` goes with a direction, not `{kind}`", expr.by.span)  # type: ignore[union-attr]
+        if kind == "holds":
+            for subject in subjects:
+                self._check_fingers(subject.name, expr.subject.span)  # type: ignore[arg-type]
         terms = []
         for subject in subjects:
             for target in targets:

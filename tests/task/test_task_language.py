@@ -93,3 +93,19 @@ def test_the_examples_of_docs_tasks_compile(tmp_path):
     for statement in statements:
         path.write_text(scene + statement + "\n")
         assert compile_program(str(path)).task
+
+
+def test_holds_on_a_robot_without_known_finger_links_is_an_error_at_its_subject(tmp_path):
+    """`R holds A` reads two finger links of R's gripper: the library arm names its own; a robot from
+    another file names none, so the statement is an error at its subject, not a failed episode."""
+    import pybullet_data
+
+    arm = f"{pybullet_data.getDataPath()}/xarm/xarm6_robot.urdf"
+    path = tmp_path / "spec.prs"
+    path.write_text(SCENE + f'arm2 = Robot on Vector3D(-0.3, -0.35, 0.8), with model "{arm}"\n'
+                    'fail "held" when arm holds cube\ngoal arm2 holds cube\n')
+    with pytest.raises(PrscError) as caught:
+        compile_program(str(path))
+    error = caught.value
+    assert (error.span.line, error.span.column) == (11, 6)
+    assert "two finger links of arm2's gripper" in error.message and "names none" in error.message
