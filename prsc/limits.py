@@ -12,27 +12,27 @@ MAX_MASS = 1e12  # kg
 
 def size_problem(value: float) -> str | None:
     """Why a width, length or height cannot be simulated, or None when it can."""
+    if size_fits(value):
+        return None
     if not math.isfinite(value) or value <= 0.0:
         return f"must be positive, got {value:g}"
-    if not MIN_SIZE <= value <= MAX_SIZE:
-        return f"is {value:g} m, outside what a simulator can represent ({MIN_SIZE:g} to {MAX_SIZE:g} m)"
-    return None
+    return f"is {value:g} m, outside what a simulator can represent ({MIN_SIZE:g} to {MAX_SIZE:g} m)"
 
 
 def mass_problem(value: float) -> str | None:
     """Why a mass cannot be simulated, or None when it can."""
+    if mass_fits(value):
+        return None
     if not math.isfinite(value) or value < 0.0:
         return f"must be a number >= 0 (kg), got {value!r}"
-    if value > MAX_MASS:
-        return f"is {value:g} kg, more than a simulator can represent ({MAX_MASS:g} kg)"
-    return None
+    return f"is {value:g} kg, more than a simulator can represent ({MAX_MASS:g} kg)"
 
 
 def size_fits(value: float) -> bool:
-    """Whether `size_problem` finds nothing (a NaN fails both comparisons): one test where a scene is written."""
+    """Whether a size can be simulated (a NaN fails both comparisons): `size_problem` says why not."""
     return MIN_SIZE <= value <= MAX_SIZE
 
 
 def mass_fits(value: float) -> bool:
-    """Whether `mass_problem` finds nothing (a NaN fails both comparisons)."""
+    """Whether a mass can be simulated (a NaN fails both comparisons): `mass_problem` says why not."""
     return 0.0 <= value <= MAX_MASS

@@ -60,7 +60,7 @@ class MjWorld:
                 continue  # a camera or a light: no body
             self.body[obj["name"]] = body
             bodies = _subtree(model, body)
-            if _mounted_robot(task, obj["name"]) and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
+            if task.touches_by_moving_links(obj["name"]) and model.body_dofnum[bodies].sum() > 0 and model.body_weldid[body] == 0:
                 # A mounted robot touches with its moving links: its base rests where it was placed.
                 bodies = [b for b in bodies if model.body_weldid[b] != 0]
             self.geoms[obj["name"]] = np.flatnonzero(collides & np.isin(model.geom_bodyid, bodies))
@@ -279,11 +279,6 @@ _STILL.flags.writeable = False
 
 def _has(task: Task, name: str) -> bool:
     return any(o.name == name for o in task.objects)
-
-
-def _mounted_robot(task: Task, name: str) -> bool:
-    """Whether a fixed articulated object touches with its moving links only (TaskObject.touches_by_moving_links)."""
-    return not _has(task, name) or task.object(name).touches_by_moving_links
 
 
 class TaskMonitor:

@@ -111,9 +111,8 @@ class PybulletTask:
                 info = p.getJointInfo(body, link, physicsClientId=client)
                 if info[2] != p.JOINT_FIXED or info[16] in moving:  # its own joint moves, or its parent does
                     moving.append(link)
-            by_moving_links = (not any(o.name == name for o in self.task.objects)
-                               or self.task.object(name).touches_by_moving_links)  # a robot's base rests where it was placed
-            mounted = fixed_base and bool(moving) and by_moving_links
+            # a robot's base rests where it was placed
+            mounted = fixed_base and bool(moving) and self.task.touches_by_moving_links(name)
             parts = self._moving[name] = [(body, k) for k in moving] if mounted else [(body, None)]
         return parts
 

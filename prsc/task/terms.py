@@ -200,6 +200,12 @@ class Task:
                 return o
         raise KeyError(name)
 
+    def touches_by_moving_links(self, name: str) -> bool:
+        """Whether object `name`, fixed and articulated, touches with its moving links only
+        (TaskObject.touches_by_moving_links; an object the task does not list, as before the flag)."""
+        found = next((o for o in self.objects if o.name == name), None)
+        return found is None or found.touches_by_moving_links
+
     def labels(self) -> tuple[str, ...]:
         """The robustness keys of a record: goal, then fail:LABEL of each failure."""
         return ("goal",) + tuple(f"fail:{f.label}" for f in self.statements.failures)
